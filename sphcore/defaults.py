@@ -1,0 +1,97 @@
+"""Every core case key, its default, unit and meaning: the one place defaults live.
+
+A ``case.toml`` holds only overrides of these. Plugins declare their own tables
+through the ``sph_options`` hook (see :mod:`sphcore.hookspecs`).
+"""
+
+from __future__ import annotations
+
+from .options import Option as O
+
+CORE: dict[str, dict[str, O]] = {
+    "case": {
+        "name": O("", "str", doc="a label for outputs; the directory name when empty"),
+        "dim": O(2, "int", doc="spatial dimension", choices=(), extra={"max": 3}, min=2),
+        "description": O("", "str", doc="free text, copied into output metadata"),
+    },
+    "domain": {
+        "min": O(None, "vector", "m", "lower corner of an axis-aligned box of wall planes (optional)", nullable=True),
+        "max": O(None, "vector", "m", "upper corner of that box", nullable=True),
+        "planes": O([], "table_list", doc="extra wall planes: {normal = [...], point = [...]}; the normal points into the fluid"),
+    },
+    # [[blocks]] is an array of tables; each entry is checked against BLOCK below.
+    "blocks": O([], "table_list", doc="particle blocks filled on a lattice of spacing dx"),
+    "particles": {
+        "dx": O(0.01, "float", "m", "initial particle spacing", positive=True),
+        "radius": O(None, "float", "m", "particle radius for wall contact; dx/2 when unset", positive=True, nullable=True),
+    },
+    "fluid": {
+        "rho0": O(1000.0, "float", "kg/m^3", "reference density", positive=True),
+        "nu": O(0.0, "float", "m^2/s", "kinematic viscosity (laminar term, Morris 1997); 0 switches it off", min=0.0),
+    },
+    "physics": {
+        "sph": O(True, "bool", doc="compute SPH forces and density; false: free particles + plugins only"),
+        "gravity": O([0.0, -9.81, 0.0], "vector", "m/s^2", "body acceleration; first dim components are used"),
+    },
+    "kernel": {
+        "name": O("wendland_c2", "str", doc="smoothing kernel", choices=("wendland_c2", "cubic_spline")),
+        "h_over_dx": O(1.3, "float", doc="smoothing length h in units of dx (support radius 2h)", positive=True),
+    },
+    "eos": {
+        "c0": O(None, "float", "m/s", "reference sound speed; derived from c0_factor when unset", positive=True, nullable=True),
+        "c0_factor": O(10.0, "float", doc="c0 = c0_factor * sqrt(2 g H), H the fluid height (Monaghan 1994)", positive=True),
+        "gamma": O(7.0, "float", doc="Tait exponent", positive=True),
+        "p_background": O(0.0, "float", "Pa", "constant added to the Tait pressure", min=None),
+    },
+    "viscosity": {
+        "alpha": O(0.1, "float", doc="Monaghan artificial viscosity, linear term", min=0.0),
+        "beta": O(0.0, "float", doc="Monaghan artificial viscosity, quadratic term", min=0.0),
+    },
+    "density_diffusion": {
+        "delta": O(0.0, "float", doc="Molteni & Colagrossi (2009) density diffusion coefficient; 0 is off", min=0.0),
+    },
+    "integrator": {
+        "scheme": O("leapfrog", "str", doc="time integration", choices=("leapfrog", "euler")),
+    },
+    "time": {
+        "t_end": O(1.0, "float", "s", "simulated time", positive=True),
+        "dt": O(None, "float", "s", "fixed time step; adaptive (CFL) when unset", positive=True, nullable=True),
+        "cfl": O(0.2, "float", doc="acoustic Courant number for the adaptive step", positive=True),
+        "force_factor": O(0.25, "float", doc="dt <= force_factor * sqrt(h / |a|max)", positive=True),
+        "viscous_factor": O(0.125, "float", doc="dt <= viscous_factor * h^2 / nu", positive=True),
+        "dt_max": O(None, "float", "s", "upper bound on the adaptive step", positive=True, nullable=True),
+    },
+    "checks": {
+        "rho_min": O(0.5, "float", doc="stop when a density falls below rho_min * rho0", positive=True),
+        "rho_max": O(1.5, "float", doc="stop when a density exceeds rho_max * rho0", positive=True),
+        "every": O(1, "int", doc="check for NaN / density bounds every N steps", positive=True),
+    },
+    "neighbours": {
+        "sort_every": O(10, "int", doc="reorder particles by cell every N steps (memory locality)", positive=True),
+    },
+    "plugins": {
+        "use": O([], "str_list", doc="plugins to load, by entry-point name (e.g. reflective, ghost, vtu)"),
+    },
+    "output": {
+        "dir": O("output", "str", doc="output directory, relative to the case directory"),
+        "progress": O("auto", "str", doc="progress display", choices=("auto", "bar", "log", "off")),
+        "log_interval_s": O(10.0, "float", "s", "wall time between progress lines when not on a terminal", positive=True),
+    },
+}
+
+#: keys of one ``[[blocks]]`` entry
+BLOCK: dict[str, O] = {
+    "min": O(None, "vector", "m", "lower corner of the block (required)", nullable=True),
+    "max": O(None, "vector", "m", "upper corner; particle centres at min + (i + 1/2) dx inside [min, max]", nullable=True),
+    "count": O(None, "list", doc="particles per axis instead of max (e.g. [36, 71])", nullable=True),
+    "velocity": O(None, "vector", "m/s", "initial velocity; zero when unset", nullable=True),
+    "kind": O("fluid", "str", doc="fluid (SPH) or sphere (rigid, only moved by integration)", choices=("fluid", "sphere")),
+}
+
+#: keys of one ``[[domain.planes]]`` entry
+PLANE: dict[str, O] = {
+    "normal": O(None, "vector", doc="normal pointing into the domain (normalised on load)", nullable=True),
+    "point": O(None, "vector", "m", "a point on the plane", nullable=True),
+}
+
+KIND_CODES = {"fluid": 0, "sphere": 1, "ghost": 2}

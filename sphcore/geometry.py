@@ -1,0 +1,81 @@
+"""Wall planes n . (X - X0) = 0 (paper Eq. 3), the normal pointing into the domain.
+
+The domain is the intersection of the planes' positive sides; a particle of radius r is
+inside when its signed distance d = n . (C - X0) (Eq. 4) is at least r for every plane.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Planes:
+    """Wall planes: unit ``normals`` (k, dim) pointing into the domain, ``points`` (k, dim)."""
+
+    normals: np.ndarray
+    points: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return self.normals.shape[0]
+
+    @property
+    def offsets(self) -> np.ndarray:
+        """n . X0 for each plane, so that d = n . C - offset."""
+        return np.einsum("kd,kd->k", self.normals, self.points)
+
+    def distances(self, pos: np.ndarray) -> np.ndarray:
+        """Signed distances d (n, k) of points to every plane (m); positive inside."""
+        return pos @ self.normals.T - self.offsets
+
+    @classmethod
+    def from_lists(cls, normals, points) -> "Planes":
+        nrm = np.asarray(normals, float).reshape(len(normals), -1)
+        nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
+        return cls(np.ascontiguousarray(nrm), np.ascontiguousarray(np.asarray(points, float).reshape(nrm.shape)))
+
+    @classmethod
+    def box(cls, lo, hi) -> "Planes":
+        """The 2*dim planes of an axis-aligned box [lo, hi]."""
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        dim = lo.size
+        eye = np.eye(dim)
+        return cls(np.ascontiguousarray(np.concatenate([eye, -eye])),
+                   np.ascontiguousarray(np.concatenate([np.tile(lo, (dim, 1)), np.tile(hi, (dim, 1))])))
+
+    def concat(self, other: "Planes") -> "Planes":
+        return Planes(np.ascontiguousarray(np.concatenate([self.normals, other.normals])),
+                      np.ascontiguousarray(np.concatenate([self.points, other.points])))
+
+
+def recession_direction(normals: np.ndarray, tol: float = 1e-12):
+    """A unit direction u with n . u >= 0 for every normal, or None if there is none.
+
+    If such a u exists, the intersection of the half-spaces (when non-empty) is unbounded
+    along u. The cone {u : N u >= 0} is {0} unless one of its extreme rays (or a line in
+    it) lies on the intersection of dim - 1 constraint planes, so checking those
+    candidates is exact.
+    """
+    k, dim = normals.shape
+    if k == 0 or np.linalg.matrix_rank(normals, tol=1e-9) < dim:
+        # normals span less than the space: any direction orthogonal to all of them
+        _, _, vt = np.linalg.svd(normals if k else np.eye(dim))
+        return vt[-1] if k else vt[0]
+    cands = []
+    if dim == 2:
+        for n in normals:
+            cands.append(np.array([-n[1], n[0]]))
+    else:
+        for a, b in combinations(range(k), 2):
+            c = np.cross(normals[a], normals[b])
+            if np.linalg.norm(c) > 1e-12:
+                cands.append(c / np.linalg.norm(c))
+    for c in cands:
+        for u in (c, -c):
+            if np.all(normals @ u >= -tol):
+                return u
+    return None

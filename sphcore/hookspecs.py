@@ -1,0 +1,145 @@
+"""Hook specifications: every point where a plugin can act, grouped by lifecycle phase.
+
+A plugin is a class registered under the entry-point group ``sphcore``; one instance is
+created per run and only for the plugins a case names in ``[plugins] use``. Hooks fire
+between kernel calls, once per run, step or stage: never once per particle. A hook
+implementation whose name is not specified here is an error at start-up.
+
+Arguments are passed by keyword; an implementation may accept any subset of them.
+``sim`` is the :class:`sphcore.simulation.Simulation`: ``sim.state`` (struct-of-arrays
+particles), ``sim.case`` (validated configuration), ``sim.t``, ``sim.step``, ``sim.dt``,
+``sim.stats`` (a dict of counters that ends up in the run summary).
+"""
+
+from __future__ import annotations
+
+import pluggy
+
+PROJECT = "sphcore"
+hookspec = pluggy.HookspecMarker(PROJECT)
+hookimpl = pluggy.HookimplMarker(PROJECT)
+
+
+# --------------------------------------------------------------------------------------
+# Set-up: once per run, before the first step
+# --------------------------------------------------------------------------------------
+
+
+@hookspec
+def sph_options():
+    """Declare the case tables this plugin reads.
+
+    Fires while the case is loaded, before validation. Return
+    ``{table_name: {key: sphcore.options.Option}}``; the host validates the case's tables
+    against it (unknown key, wrong type are errors naming file and key) and fills defaults.
+    """
+
+
+@hookspec
+def sph_configure(case):
+    """Read and check this plugin's validated options.
+
+    Fires once after the whole case is validated, before any particle exists.
+    ``case.config[table]`` holds the plugin's table with defaults filled in. Raise
+    :class:`sphcore.errors.CaseError` for values that are valid alone but not together
+    (e.g. planes that bound no region). May not change the case.
+    """
+
+
+@hookspec
+def sph_setup(sim):
+    """Prepare for the run with the initial particles in place.
+
+    Fires once after the particles are built and before the first force computation.
+    May add particles (``sim.state.append``), allocate work arrays, and check the initial
+    state against its own geometry (raise CaseError, e.g. a particle outside a wall).
+    """
+
+
+# --------------------------------------------------------------------------------------
+# Forces: once per force evaluation
+# --------------------------------------------------------------------------------------
+
+
+@hookspec
+def sph_extra_sources(sim):
+    """Return extra *source* particles for this force evaluation, or None.
+
+    Fires before the neighbour search of every force evaluation. The result is a
+    :class:`sphcore.particles.Sources` (positions, velocities, densities, pressures,
+    masses) that takes part in continuity and momentum as neighbours only: sources are
+    never integrated or written as fluid. This is how ghost (mirror) particles enter.
+    """
+
+
+@hookspec
+def sph_accelerations(sim, acc):
+    """Add accelerations to ``acc`` (shape (n, dim), m/s^2) in place.
+
+    Fires after the core rates (pressure, viscosity, gravity) of every force evaluation.
+    """
+
+
+# --------------------------------------------------------------------------------------
+# Integration: once per step
+# --------------------------------------------------------------------------------------
+
+
+@hookspec
+def sph_after_integrate(sim, pos0, pos, vel, acc, dt):
+    """Correct positions and velocities after the free-motion update of a step.
+
+    Fires once per step, right after the integrator moved every particle from ``pos0``
+    (start of the step) to ``pos`` with no walls present. ``vel`` is the velocity at the
+    end of the step, ``acc`` the acceleration used for the step, ``dt`` the step (s).
+    May change ``pos`` and ``vel`` in place (this is where the reflective boundary acts);
+    must not change ``pos0`` or ``acc``. The integrator keeps its later stages consistent
+    with the corrected values.
+    """
+
+
+@hookspec
+def sph_after_step(sim):
+    """Inspect the state after a complete step: checks, counters, diagnostics.
+
+    Fires once per step after the core checks. May raise
+    :class:`sphcore.errors.Instability` to stop the run; may update ``sim.stats``.
+    Must not change particle data.
+    """
+
+
+@hookspec
+def sph_max_dt(sim):
+    """Return an upper bound on the next time step (s), or None for no limit.
+
+    Fires once per step before the step size is chosen; the smallest bound wins.
+    """
+
+
+# --------------------------------------------------------------------------------------
+# Output and end of run
+# --------------------------------------------------------------------------------------
+
+
+@hookspec
+def sph_output(sim, final):
+    """Write output if this writer's schedule says so.
+
+    Fires after the set-up (``sim.step == 0``), after every step, and once more with
+    ``final=True`` when the run ends or stops on an instability (then ``sim`` holds the
+    last good state). Each writer owns its schedule, files and directory layout below
+    ``sim.output_dir``. Must not change particle data.
+    """
+
+
+@hookspec
+def sph_summary(sim):
+    """Return a dict of figures to merge into the run summary, or None.
+
+    Fires once at the end of the run, before ``sph_finish``.
+    """
+
+
+@hookspec
+def sph_finish(sim):
+    """Release resources (close files). Fires once at the end of every run, also a failed one."""

@@ -1,0 +1,101 @@
+"""Particle state as a struct of contiguous float64 arrays, and lattice blocks."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+FLUID, SPHERE, GHOST = 0, 1, 2
+
+
+@dataclass
+class ParticleState:
+    """All integrated particles. Arrays share their first axis (the particle index).
+
+    pos, vel: (n, dim) in m and m/s; rho (kg/m^3), p (Pa), m (kg), radius (m): (n,);
+    kind: int8 code (FLUID, SPHERE); id: int64, stable across reordering.
+    """
+
+    pos: np.ndarray
+    vel: np.ndarray
+    rho: np.ndarray
+    p: np.ndarray
+    m: np.ndarray
+    radius: np.ndarray
+    kind: np.ndarray
+    id: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.pos.shape[0]
+
+    @property
+    def dim(self) -> int:
+        return self.pos.shape[1]
+
+    def arrays(self):
+        return [(f.name, getattr(self, f.name)) for f in fields(self)]
+
+    def permute(self, order: np.ndarray) -> None:
+        """Reorder every array by ``order`` (a permutation of 0..n-1)."""
+        for name, a in self.arrays():
+            setattr(self, name, np.ascontiguousarray(a[order]))
+
+    def append(self, other: "ParticleState") -> None:
+        """Add particles (e.g. from a plugin's set-up); ids continue after the largest."""
+        other.id = other.id + (self.id.max() + 1 if self.n else 0)
+        for name, a in self.arrays():
+            setattr(self, name, np.ascontiguousarray(np.concatenate([a, getattr(other, name)])))
+
+    def copy(self) -> "ParticleState":
+        return ParticleState(**{name: a.copy() for name, a in self.arrays()})
+
+    @classmethod
+    def empty(cls, dim: int) -> "ParticleState":
+        z = np.zeros(0)
+        return cls(np.zeros((0, dim)), np.zeros((0, dim)), z, z.copy(), z.copy(), z.copy(),
+                   np.zeros(0, np.int8), np.zeros(0, np.int64))
+
+
+@dataclass
+class Sources:
+    """Neighbour-only particles a plugin adds to a force evaluation (e.g. ghosts)."""
+
+    pos: np.ndarray
+    vel: np.ndarray
+    rho: np.ndarray
+    p: np.ndarray
+    m: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.pos.shape[0]
+
+
+def lattice(lo, hi, dx: float, count=None) -> np.ndarray:
+    """Centres of a block filled on a square lattice of spacing dx (m).
+
+    Centres sit at ``lo + (i + 1/2) dx``; along each axis there are ``count[k]`` of them,
+    or ``round((hi - lo) / dx)`` when no count is given.
+    """
+    lo = np.asarray(lo, float)
+    if count is None:
+        count = np.rint((np.asarray(hi, float) - lo) / dx).astype(int)
+    axes = [lo[k] + (np.arange(int(c)) + 0.5) * dx for k, c in enumerate(count)]
+    grid = np.meshgrid(*axes, indexing="ij")
+    return np.ascontiguousarray(np.stack([g.ravel() for g in grid], axis=1))
+
+
+def make_block(pos, vel, rho0: float, dx: float, radius: float, kind: int) -> ParticleState:
+    n, dim = pos.shape
+    return ParticleState(
+        pos=np.ascontiguousarray(pos, dtype=np.float64),
+        vel=np.ascontiguousarray(np.broadcast_to(np.asarray(vel, float), (n, dim))),
+        rho=np.full(n, rho0),
+        p=np.zeros(n),
+        m=np.full(n, rho0 * dx**dim),
+        radius=np.full(n, radius),
+        kind=np.full(n, kind, np.int8),
+        id=np.arange(n, dtype=np.int64),
+    )
