@@ -1,0 +1,197 @@
+"""Case directories: read ``case.toml``, apply ``--set`` overrides, validate, derive.
+
+A case is data: TOML is parsed, never executed. Every problem raises
+:class:`sphcore.errors.CaseError` naming the file, the key and what was expected.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11
+    import tomli as tomllib
+
+import numpy as np
+
+from . import defaults
+from .errors import CaseError
+from .geometry import Planes, recession_direction
+from .options import check_value, validate_table
+
+CASE_FILE = "case.toml"
+
+
+@dataclass
+class Case:
+    """A validated case: ``config[section][key]`` with every default filled in."""
+
+    file: Path
+    dir: Path
+    config: dict
+    planes: Planes
+    blocks: list = field(default_factory=list)
+
+    @property
+    def dim(self) -> int:
+        return self.config["case"]["dim"]
+
+    @property
+    def name(self) -> str:
+        return self.config["case"]["name"] or self.dir.name
+
+    @property
+    def dx(self) -> float:
+        return self.config["particles"]["dx"]
+
+    @property
+    def radius(self) -> float:
+        r = self.config["particles"]["radius"]
+        return 0.5 * self.dx if r is None else r
+
+    @property
+    def h(self) -> float:
+        """Smoothing length (m)."""
+        return self.config["kernel"]["h_over_dx"] * self.dx
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """Gravity (3,) padded with zeros; only the first dim components act."""
+        g = np.zeros(3)
+        g[: self.dim] = self.config["physics"]["gravity"][: self.dim]
+        return g
+
+
+def read_toml(path: Path) -> dict:
+    try:
+        with open(path, "rb") as f:
+            return tomllib.load(f)
+    except FileNotFoundError:
+        raise CaseError(path, "-", "no such file (a case directory holds case.toml)") from None
+    except tomllib.TOMLDecodeError as e:
+        raise CaseError(path, "-", f"not valid TOML: {e}") from None
+    except OSError as e:
+        raise CaseError(path, "-", f"cannot read: {e.strerror}") from None
+
+
+def parse_override(text: str) -> tuple[list[str], object]:
+    """``section.key=value`` -> (["section", "key"], value); value is read as TOML."""
+    if "=" not in text:
+        raise CaseError("--set", text, "expected section.key=value")
+    key, raw = text.split("=", 1)
+    path = key.strip().split(".")
+    if len(path) < 2 or not all(path):
+        raise CaseError("--set", key, "expected section.key=value")
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw  # a bare word, e.g. --set kernel.name=cubic_spline
+    return path, value
+
+
+def apply_overrides(raw: dict, overrides) -> dict:
+    """A copy of ``raw`` with each ``section.key=value`` set (sweeps use the same)."""
+    out = copy.deepcopy(raw)
+    for text in overrides or ():
+        path, value = parse_override(text) if isinstance(text, str) else text
+        node = out
+        for part in path[:-1]:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                raise CaseError("--set", ".".join(path), "that section is not a table")
+        node[path[-1]] = value
+    return out
+
+
+def _vector(file, key, value, dim, allow_longer=False):
+    if value is None:
+        raise CaseError(file, key, f"required: a list of {dim} numbers")
+    if len(value) != dim and not (allow_longer and len(value) > dim):
+        raise CaseError(file, key, f"expected {dim} components for a {dim}D case, got {len(value)}")
+    return np.asarray(value[:dim], float)
+
+
+def _planes(file, cfg, dim) -> Planes:
+    dom = cfg["domain"]
+    normals, points = [], []
+    if (dom["min"] is None) != (dom["max"] is None):
+        raise CaseError(file, "domain.min" if dom["min"] is None else "domain.max", "min and max come together")
+    if dom["min"] is not None:
+        lo = _vector(file, "domain.min", dom["min"], dim)
+        hi = _vector(file, "domain.max", dom["max"], dim)
+        if np.any(hi <= lo):
+            raise CaseError(file, "domain.max", f"expected every component above domain.min {lo.tolist()}")
+        box = Planes.box(lo, hi)
+        normals += list(box.normals)
+        points += list(box.points)
+    for k, entry in enumerate(dom["planes"]):
+        key = f"domain.planes[{k}]"
+        e = validate_table(defaults.PLANE, entry, file, key)
+        n = _vector(file, f"{key}.normal", e["normal"], dim)
+        if not np.linalg.norm(n) > 0:
+            raise CaseError(file, f"{key}.normal", "expected a non-zero vector")
+        normals.append(n / np.linalg.norm(n))
+        points.append(_vector(file, f"{key}.point", e["point"], dim))
+    if not normals:
+        raise CaseError(file, "domain", "no wall planes: give domain.min/max or [[domain.planes]]")
+    planes = Planes.from_lists(normals, points)
+    u = recession_direction(planes.normals)
+    if u is not None:
+        raise CaseError(file, "domain.planes", f"the planes bound no region: it is open along {np.round(u, 6).tolist()}")
+    return planes
+
+
+def _blocks(file, cfg, dim):
+    if not cfg["blocks"]:
+        raise CaseError(file, "blocks", "expected at least one [[blocks]] table of particles")
+    out = []
+    for k, entry in enumerate(cfg["blocks"]):
+        key = f"blocks[{k}]"
+        b = validate_table(defaults.BLOCK, entry, file, key)
+        b["min"] = _vector(file, f"{key}.min", b["min"], dim)
+        if b["count"] is not None:
+            if len(b["count"]) != dim or not all(isinstance(c, int) and not isinstance(c, bool) and c > 0 for c in b["count"]):
+                raise CaseError(file, f"{key}.count", f"expected {dim} positive integers")
+        elif b["max"] is None:
+            raise CaseError(file, f"{key}.max", "required (or give count)")
+        else:
+            b["max"] = _vector(file, f"{key}.max", b["max"], dim)
+            if np.any(b["max"] <= b["min"]):
+                raise CaseError(file, f"{key}.max", "expected every component above min")
+        b["velocity"] = np.zeros(dim) if b["velocity"] is None else _vector(file, f"{key}.velocity", b["velocity"], dim)
+        out.append(b)
+    return out
+
+
+def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
+    """Validate a raw TOML dict. ``plugin_schemas`` maps table name -> {key: Option}."""
+    plugin_schemas = plugin_schemas or {}
+    cfg = {}
+    for section, value in raw.items():
+        if section not in defaults.CORE and section not in plugin_schemas:
+            known = ", ".join(sorted(set(defaults.CORE) | set(plugin_schemas)))
+            raise CaseError(file, section, f"unknown section (known: {known})")
+    for section, schema in defaults.CORE.items():
+        if isinstance(schema, dict):
+            cfg[section] = validate_table(schema, raw.get(section, {}), file, section)
+        else:
+            cfg[section] = check_value(schema, raw.get(section, schema.default), file, section)
+    for table, schema in plugin_schemas.items():
+        cfg[table] = validate_table(schema, raw.get(table, {}), file, table)
+    dim = cfg["case"]["dim"]
+    if len(cfg["physics"]["gravity"]) < dim:
+        raise CaseError(file, "physics.gravity", f"expected at least {dim} components")
+    if cfg["checks"]["rho_min"] >= cfg["checks"]["rho_max"]:
+        raise CaseError(file, "checks.rho_max", "expected a value above checks.rho_min")
+    planes = _planes(file, cfg, dim)
+    blocks = _blocks(file, cfg, dim)
+    return Case(file=Path(file), dir=Path(file).parent, config=cfg, planes=planes, blocks=blocks)
+
+
+def case_file(case_dir) -> Path:
+    p = Path(case_dir)
+    return p / CASE_FILE if p.is_dir() else p

@@ -1,0 +1,50 @@
+"""Instability detection after a step: non-finite values, density out of bounds, particles
+outside the walls. One serial pass (cheap next to the force kernel) that returns the worst
+offender, so the message can name it."""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+OK, NONFINITE, RHO_LOW, RHO_HIGH, OUTSIDE = 0, 1, 2, 3, 4
+REASONS = {
+    NONFINITE: "non-finite position, velocity or density",
+    RHO_LOW: "density below the lower bound",
+    RHO_HIGH: "density above the upper bound",
+    OUTSIDE: "a particle left the domain (its centre crossed a wall plane)",
+}
+
+
+@njit(cache=True)
+def scan(pos, vel, rho, rho_lo, rho_hi, check_rho, normals, offsets):
+    """(code, index, value) of the worst problem; code OK when there is none."""
+    n, dim = pos.shape
+    worst_lo, i_lo = rho_lo, -1
+    worst_hi, i_hi = rho_hi, -1
+    worst_out, i_out = 0.0, -1
+    for i in range(n):
+        s = rho[i]
+        for d in range(dim):
+            s += pos[i, d] + vel[i, d]
+        if not math.isfinite(s):
+            return NONFINITE, i, s
+        if check_rho:
+            if rho[i] < worst_lo:
+                worst_lo, i_lo = rho[i], i
+            if rho[i] > worst_hi:
+                worst_hi, i_hi = rho[i], i
+        for k in range(normals.shape[0]):
+            dist = -offsets[k]
+            for d in range(dim):
+                dist += normals[k, d] * pos[i, d]
+            if dist < worst_out:
+                worst_out, i_out = dist, i
+    if i_out >= 0:
+        return OUTSIDE, i_out, worst_out
+    if i_lo >= 0:
+        return RHO_LOW, i_lo, worst_lo
+    if i_hi >= 0:
+        return RHO_HIGH, i_hi, worst_hi
+    return OK, -1, 0.0

@@ -1,0 +1,78 @@
+"""The ``sph`` command: run, check, plugins.
+
+Exit status: 0 done; 1 the run went unstable (last good output kept); 2 bad input (case,
+options, output directory), nothing written; 128 + signal number when stopped by SIGINT
+or SIGTERM after writing a checkpoint.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+
+from .errors import CaseError, OutputError
+
+
+def _parser():
+    p = argparse.ArgumentParser(prog="sph", description="Weakly compressible SPH with pluggable boundaries.")
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run a case directory")
+    r.add_argument("case_dir")
+    r.add_argument("--output", help="output directory (default: <case>/output)")
+    r.add_argument("--t-end", type=float, help="simulated time to reach (s), overrides time.t_end")
+    r.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                   help="override a case key (value read as TOML), repeatable")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing output directory written by sph")
+    r.add_argument("--restart", action="store_true", help="continue from the output directory's checkpoint")
+    r.add_argument("--progress", choices=("auto", "bar", "log", "off"))
+    c = sub.add_parser("check", help="validate a case without running it")
+    c.add_argument("case_dir")
+    c.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
+    sub.add_parser("plugins", help="list installed plugins and the hooks they implement")
+    return p
+
+
+def _fail(msg, status):
+    print(f"sph: error: {msg}", file=sys.stderr)
+    return status
+
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    from . import pluginhost, runner
+
+    try:
+        if args.command == "plugins":
+            for row in pluginhost.describe():
+                print(f"{row['name']:<12} {row['dist']} {row['version']}  hooks: {', '.join(row['hooks'])}")
+            return 0
+        if args.command == "check":
+            case, pm = runner.load(args.case_dir, args.overrides)
+            from .simulation import build_state
+
+            state = build_state(case)
+            print(f"{case.file}: ok: {case.dim}D, {state.n} particles, {case.planes.count} wall planes, "
+                  f"plugins: {', '.join(case.config['plugins']['use']) or 'none'}")
+            return 0
+        summary = runner.run(args.case_dir, args.output, args.overrides, args.t_end, args.overwrite,
+                             args.restart, args.progress)
+    except CaseError as e:
+        return _fail(str(e), 2)
+    except (OutputError, pluginhost.PluginLoadError) as e:
+        return _fail(str(e), 2)
+    status = summary["status"]
+    print(f"{summary['case']}: {status}: t = {summary['t']:.6g} s, {summary['steps']} steps, "
+          f"{summary['n_particles']} particles, {summary['wall_time_s']:.2f} s wall, "
+          f"{summary['particle_steps_per_s']:.3g} particle-steps/s, escaped {summary['escaped']}, "
+          f"peak memory {summary['peak_memory_mb']:.0f} MB")
+    if status == "unstable":
+        return _fail(summary["message"], 1)
+    if status == "stopped":
+        print(f"sph: {summary['message']}", file=sys.stderr)
+        return 128 + int(summary.get("_signum") or signal.SIGINT)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,132 @@
+"""Cell-linked-list neighbour search.
+
+Particles are binned into square/cubic cells of side ``cell_size`` (the kernel support,
+2h) and counting-sorted by cell, giving ``order`` (particle indices grouped by cell) and
+``cell_start`` (CSR offsets: the particles of cell c are ``order[cell_start[c]:cell_start[c+1]]``).
+A particle's neighbours within the support lie in its own and the adjacent cells. In 2D
+the grid has one layer in z, so the same code serves both dimensions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(cache=True)
+def bounding_box(pos):
+    """Lower and upper corner (3,) of the points; z is 0 in 2D."""
+    n, dim = pos.shape
+    lo = np.zeros(3)
+    hi = np.zeros(3)
+    for d in range(dim):
+        lo[d] = np.inf
+        hi[d] = -np.inf
+    for i in range(n):
+        for d in range(dim):
+            x = pos[i, d]
+            if x < lo[d]:
+                lo[d] = x
+            if x > hi[d]:
+                hi[d] = x
+    return lo, hi
+
+
+@njit(cache=True, inline="always")
+def cell_coords(pos, i, lo, cell_size, ncell):
+    """Integer cell coordinates of particle i (clamped into the grid)."""
+    dim = pos.shape[1]
+    cx = min(int((pos[i, 0] - lo[0]) / cell_size), ncell[0] - 1)
+    cy = min(int((pos[i, 1] - lo[1]) / cell_size), ncell[1] - 1)
+    cz = 0
+    if dim == 3:
+        cz = min(int((pos[i, 2] - lo[2]) / cell_size), ncell[2] - 1)
+    return cx, cy, cz
+
+
+@njit(cache=True, parallel=True)
+def _cell_ids(pos, lo, cell_size, ncell, out):
+    for i in prange(pos.shape[0]):
+        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
+        out[i] = cx + ncell[0] * (cy + ncell[1] * cz)
+
+
+@njit(cache=True)
+def _counting_sort(cell, ncells, order, cell_start):
+    cell_start[:] = 0
+    for i in range(cell.shape[0]):
+        cell_start[cell[i] + 1] += 1
+    for c in range(ncells):
+        cell_start[c + 1] += cell_start[c]
+    fill = cell_start[:-1].copy()
+    for i in range(cell.shape[0]):  # stable: keeps the current order inside a cell
+        c = cell[i]
+        order[fill[c]] = i
+        fill[c] += 1
+
+
+def grid_shape(lo, hi, cell_size, dim):
+    """Cells per axis (3,) int64 covering [lo, hi]."""
+    ncell = np.ones(3, np.int64)
+    ncell[:dim] = np.floor((hi[:dim] - lo[:dim]) / cell_size).astype(np.int64) + 1
+    return ncell
+
+
+class CellGrid:
+    """A cell grid over a set of points, rebuilt for every force evaluation."""
+
+    def __init__(self, pos: np.ndarray, cell_size: float):
+        n, dim = pos.shape
+        lo, hi = bounding_box(pos)
+        self.lo, self.cell_size = lo, float(cell_size)
+        self.ncell = grid_shape(lo, hi, cell_size, dim)
+        ncells = int(np.prod(self.ncell))
+        if ncells > 8 * n + 4096:
+            # a few particles flew far from the rest: the grid would be mostly empty.
+            raise OverflowError(f"cell grid of {ncells} cells for {n} particles")
+        self.cell = np.empty(n, np.int64)
+        _cell_ids(pos, lo, self.cell_size, self.ncell, self.cell)
+        self.order = np.empty(n, np.int64)
+        self.cell_start = np.empty(ncells + 1, np.int64)
+        _counting_sort(self.cell, ncells, self.order, self.cell_start)
+
+
+@njit(cache=True)
+def neighbour_pairs(pos, order, cell_start, lo, cell_size, ncell, radius):
+    """All pairs (i, j), i != j, closer than ``radius``, found through the cell grid.
+
+    Used by tests and diagnostics; the force kernels walk the cells the same way without
+    storing pairs.
+    """
+    n, dim = pos.shape
+    r2max = radius * radius
+    out_i = []
+    out_j = []
+    zr = 1 if dim == 3 else 0
+    for i in range(n):
+        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
+        for dz in range(-zr, zr + 1):
+            z = cz + dz
+            if z < 0 or z >= ncell[2]:
+                continue
+            for dy in range(-1, 2):
+                y = cy + dy
+                if y < 0 or y >= ncell[1]:
+                    continue
+                for dx in range(-1, 2):
+                    x = cx + dx
+                    if x < 0 or x >= ncell[0]:
+                        continue
+                    c = x + ncell[0] * (y + ncell[1] * z)
+                    for k in range(cell_start[c], cell_start[c + 1]):
+                        j = order[k]
+                        if j == i:
+                            continue
+                        r2 = 0.0
+                        for d in range(dim):
+                            dd = pos[i, d] - pos[j, d]
+                            r2 += dd * dd
+                        if r2 < r2max:
+                            out_i.append(i)
+                            out_j.append(j)
+    return np.array(out_i, dtype=np.int64), np.array(out_j, dtype=np.int64)

@@ -1,0 +1,53 @@
+"""Progress while a run goes: a bar on a terminal, a plain line at a steady interval in a log."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+
+class Progress:
+    """Shows simulated time, ETA, steps per second and particle-steps per second."""
+
+    def __init__(self, t_end: float, n: int, mode: str = "auto", interval_s: float = 10.0, stream=None):
+        self.stream = stream or sys.stderr
+        if mode == "auto":
+            mode = "bar" if self.stream.isatty() else "log"
+        self.mode, self.t_end, self.n, self.interval = mode, t_end, n, interval_s
+        self.start = self.last_log = time.perf_counter()
+        self.steps0 = None
+        self.bar = None
+        if mode == "bar":
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=t_end, unit="s", unit_scale=False, file=self.stream, dynamic_ncols=True,
+                            bar_format="{l_bar}{bar}| t={n:.4g}/{total:.4g} s [{elapsed}<{remaining}{postfix}]")
+
+    def rates(self, step):
+        el = max(time.perf_counter() - self.start, 1e-9)
+        steps = step - (self.steps0 or 0)
+        return steps / el, steps * self.n / el
+
+    def update(self, sim):
+        if self.steps0 is None:
+            self.steps0 = sim.step - 1
+        if self.mode == "off":
+            return
+        sps, psps = self.rates(sim.step)
+        if self.bar is not None:
+            self.bar.n = min(sim.t, self.t_end)
+            self.bar.set_postfix_str(f"{sps:.0f} steps/s, {psps:.3g} particle-steps/s", refresh=False)
+            self.bar.refresh()
+            return
+        now = time.perf_counter()
+        if now - self.last_log >= self.interval:
+            self.last_log = now
+            frac = sim.t / self.t_end
+            eta = (now - self.start) * (1 - frac) / frac if frac > 0 else float("nan")
+            print(f"[sph] t = {sim.t:.5g}/{self.t_end:.5g} s ({100 * frac:.1f}%), step {sim.step}, "
+                  f"dt = {sim.dt:.3g} s, {sps:.0f} steps/s, {psps:.3g} particle-steps/s, ETA {eta:.0f} s",
+                  file=self.stream, flush=True)
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()

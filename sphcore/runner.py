@@ -1,0 +1,127 @@
+"""Run a case directory end to end: load, prepare the output directory, step, summarise.
+
+Used by the CLI (``sph run``) and by sweeps; returns the summary as a dict.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import resource
+import shutil
+import signal
+import time
+from pathlib import Path
+
+from . import checkpoint, pluginhost
+from .case import apply_overrides, case_file, read_toml, validate
+from .errors import CaseError, Instability, OutputError
+from .progress import Progress
+from .simulation import Simulation
+
+MARKER = ".sphcore-output"  # only directories holding it may be overwritten
+
+
+class Stopped(Exception):
+    """SIGINT or SIGTERM arrived; a checkpoint was written."""
+
+    def __init__(self, signum):
+        self.signum = signum
+        super().__init__(f"stopped by {signal.Signals(signum).name}")
+
+
+def load(case_dir, overrides=(), t_end=None):
+    """(case, plugin manager) for a case directory, with --set overrides applied."""
+    file = case_file(case_dir)
+    raw = apply_overrides(read_toml(file), overrides)
+    if t_end is not None:
+        raw = apply_overrides(raw, [(["time", "t_end"], t_end)])
+    case = validate(raw, file, pluginhost.option_schemas())
+    pm = pluginhost.make_manager(case.config["plugins"]["use"], file)
+    pm.hook.sph_configure(case=case)
+    return case, pm
+
+
+def prepare_output(case, output=None, overwrite=False, restart=False) -> Path:
+    """Create the output directory; never clobber one silently."""
+    out = Path(output) if output is not None else case.dir / case.config["output"]["dir"]
+    if out.exists() and any(out.iterdir()) and not restart:
+        if not overwrite:
+            raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or --output DIR")
+        if not (out / MARKER).exists():
+            raise OutputError(f"refusing to overwrite {out}: it was not written by sph (no {MARKER} file)")
+        shutil.rmtree(out)
+    if restart and not (out / checkpoint.NAME).exists():
+        raise CaseError(out / checkpoint.NAME, "--restart", "no checkpoint to restart from")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / MARKER).touch()
+    except OSError as e:
+        raise OutputError(f"cannot create output directory {out}: {e.strerror}") from e
+    return out
+
+
+def peak_memory_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: kB
+
+
+def _write_json(path: Path, data: dict):
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(data, indent=2, default=float) + "\n")
+    os.replace(tmp, path)
+
+
+def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restart=False, progress=None,
+        quiet=False) -> dict:
+    case, pm = load(case_dir, overrides, t_end)
+    out = prepare_output(case, output, overwrite, restart)
+    sim = Simulation(case, pm, out, restarting=restart)
+    if restart:
+        checkpoint.load(sim, out)
+    stop = {"signum": None}
+
+    def on_signal(signum, frame):
+        stop["signum"] = signum
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    mode = "off" if quiet else (progress or case.config["output"]["progress"])
+    bar = Progress(sim.t_end, sim.state.n, mode, case.config["output"]["log_interval_s"])
+    start, step0, status, message = time.perf_counter(), sim.step, "completed", ""
+    try:
+        if not restart:
+            sim.output()
+        while not sim.done():
+            sim.advance()
+            sim.output()
+            bar.update(sim)
+            if stop["signum"] is not None:
+                checkpoint.save(sim, out)
+                raise Stopped(stop["signum"])
+        sim.output(final=True)
+        checkpoint.save(sim, out)
+    except Instability as e:
+        status, message = "unstable", str(e)
+    except Stopped as e:
+        status, message = "stopped", f"{e}; checkpoint written, continue with --restart"
+        stop["stopped_by"] = e.signum
+    finally:
+        bar.close()
+        for s, h in old.items():
+            signal.signal(s, h)
+        wall = time.perf_counter() - start
+        steps = sim.step - step0
+        summary = {
+            "case": case.name, "status": status, "message": message,
+            "t": sim.t, "wall_time_s": wall, "steps": steps, "n_particles": sim.state.n,
+            "particle_steps_per_s": steps * sim.state.n / wall if wall > 0 else 0.0,
+            "escaped": int(sim.stats.get("escaped", 0)), "peak_memory_mb": peak_memory_mb(),
+            "c0": sim.c0, "h": sim.h, "plugins": case.config["plugins"]["use"],
+            "counters": dict(sim.counters),
+        }
+        for extra in pm.hook.sph_summary(sim=sim):
+            summary.update(extra or {})
+        pm.hook.sph_finish(sim=sim)
+        _write_json(out / "summary.json", summary)
+    summary["_sim"] = sim
+    summary["_signum"] = stop.get("stopped_by")
+    return summary

@@ -1,0 +1,210 @@
+"""The simulation: particle state, physics constants, work arrays and the step.
+
+A step reads: reorder (when due) -> dt -> integrator (rates, free motion,
+``sph_after_integrate``) -> checks -> ``sph_after_step`` -> ``sph_output``. Only the
+physics a case asks for runs; ``counters`` records which kernels ran, for tests and
+for the run summary.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from . import checks
+from .equations import sph_rates, tait_pressure, uniform_acceleration
+from .errors import CaseError, Instability
+from .integrators import SCHEMES
+from .kernels import KERNEL_IDS, SUPPORT
+from .neighbours import CellGrid
+from .particles import FLUID, ParticleState, lattice, make_block
+from .timestep import adaptive_dt, max_norms
+
+KIND_CODES = {"fluid": FLUID, "sphere": 1}
+INSIDE_TOL = 1e-9  # relative to the radius: a particle at d = r - ulp still counts as inside
+
+
+def build_state(case) -> ParticleState:
+    """Particles of every [[blocks]] entry; each must lie inside every wall plane."""
+    dx, r, rho0 = case.dx, case.radius, case.config["fluid"]["rho0"]
+    state = ParticleState.empty(case.dim)
+    for k, b in enumerate(case.blocks):
+        pos = lattice(b["min"], b["max"], dx, b["count"])
+        if pos.shape[0] == 0:
+            raise CaseError(case.file, f"blocks[{k}]", f"the block holds no particle at dx = {dx} m")
+        d = case.planes.distances(pos)
+        bad = np.argwhere(d < r * (1.0 - INSIDE_TOL))
+        if bad.size:
+            i, p = bad[0]
+            raise CaseError(case.file, f"blocks[{k}]", f"particle at {pos[i].round(9).tolist()} is outside wall plane {p} "
+                            f"(distance {d[i, p]:.6g} m < radius {r:.6g} m)")
+        state.append(make_block(pos, b["velocity"], rho0, dx, r, KIND_CODES[b["kind"]]))
+    return state
+
+
+def reference_sound_speed(case, state) -> float:
+    """eos.c0, or c0_factor * sqrt(2 g H) with H the fluid's extent against gravity (m/s)."""
+    c0 = case.config["eos"]["c0"]
+    if c0 is not None:
+        return c0
+    g = np.linalg.norm(case.gravity)
+    if g == 0:
+        raise CaseError(case.file, "eos.c0", "required when gravity is zero (no height rule applies)")
+    up = -case.gravity[: case.dim] / g
+    z = state.pos[state.kind == FLUID] @ up
+    height = (z.max() - z.min() + case.dx) if z.size else case.dx
+    return case.config["eos"]["c0_factor"] * math.sqrt(2.0 * g * height)
+
+
+class Simulation:
+    """State plus the plugins of one run. ``pm`` is the run's pluggy PluginManager."""
+
+    def __init__(self, case, pm, output_dir: Path | None = None, restarting: bool = False):
+        self.case, self.pm = case, pm
+        self.output_dir = output_dir
+        self.restarting = restarting
+        self.t, self.step, self.dt = 0.0, 0, 0.0
+        self.t_end = case.config["time"]["t_end"]
+        self.stats: dict = {"escaped": 0}
+        self.counters: Counter = Counter()
+        self.state = build_state(case)
+        cfg = case.config
+        self.sph = cfg["physics"]["sph"]
+        self.evolves_density = self.sph
+        self.h = case.h
+        self.kernel_id = KERNEL_IDS[cfg["kernel"]["name"]]
+        self.gravity = case.gravity
+        self.rho0 = cfg["fluid"]["rho0"]
+        self.nu = cfg["fluid"]["nu"] if self.sph else 0.0
+        self.alpha, self.beta = cfg["viscosity"]["alpha"], cfg["viscosity"]["beta"]
+        self.delta = cfg["density_diffusion"]["delta"]
+        self.c0 = reference_sound_speed(case, self.state) if self.sph else 0.0
+        self.gamma, self.p_background = cfg["eos"]["gamma"], cfg["eos"]["p_background"]
+        self.integrator = SCHEMES[cfg["integrator"]["scheme"]]()
+        self.normals = np.ascontiguousarray(case.planes.normals)
+        self.offsets = np.ascontiguousarray(case.planes.offsets)
+        self.n_sources = 0
+        pm.hook.sph_setup(sim=self)
+        self._allocate()
+        self.update_pressure()
+
+    # -- work arrays ------------------------------------------------------------------
+
+    def _allocate(self):
+        n, dim = self.state.n, self.state.dim
+        self.acc = np.zeros((n, dim))
+        self.pos0 = np.zeros((n, dim))
+        self.acc_old = np.zeros((n, dim)) if self.integrator.name == "leapfrog" else self.acc
+        self.drho = np.zeros(n) if self.evolves_density else None
+        self.drho_old = np.zeros(n) if self.evolves_density and self.integrator.name == "leapfrog" else None
+
+    def reorder(self):
+        """Sort particles by cell so that neighbours are near in memory (ids keep identity)."""
+        grid = CellGrid(self.state.pos, SUPPORT * self.h)
+        order = grid.order
+        self.state.permute(order)
+        self.acc[:] = self.acc[order]
+        if self.drho is not None:
+            self.drho[:] = self.drho[order]
+        self.counters["reorder"] += 1
+
+    # -- rates ------------------------------------------------------------------------
+
+    def compute_rates(self):
+        """acc (and drho) at the current state: SPH terms, gravity, plugin accelerations."""
+        st = self.state
+        self.counters["rates"] += 1
+        if not self.sph:
+            uniform_acceleration(self.gravity, self.acc)
+        else:
+            pos, vel, rho, p, m = self._sources()
+            try:
+                grid = CellGrid(pos, SUPPORT * self.h)
+            except OverflowError as e:
+                raise Instability(self.step, self.t, -1, f"particles spread far apart ({e})") from None
+            self.counters["neighbour_search"] += 1
+            sph_rates(st.n, pos, vel, rho, p, m, grid.order, grid.cell_start, grid.lo, grid.cell_size, grid.ncell,
+                      self.kernel_id, self.h, self.c0, self.alpha, self.beta, self.nu, self.delta,
+                      self.gravity, self.acc, self.drho)
+            self.counters["continuity"] += 1
+            self.counters["momentum"] += 1
+            if self.alpha > 0 or self.beta > 0:
+                self.counters["artificial_viscosity"] += 1
+            if self.nu > 0:
+                self.counters["laminar_viscosity"] += 1
+            if self.delta > 0:
+                self.counters["density_diffusion"] += 1
+        self.pm.hook.sph_accelerations(sim=self, acc=self.acc)
+
+    def _sources(self):
+        """The fluid followed by any plugin source particles (ghosts)."""
+        st = self.state
+        extra = [s for s in self.pm.hook.sph_extra_sources(sim=self) if s is not None and s.n]
+        self.n_sources = sum(s.n for s in extra)
+        if not extra:
+            return st.pos, st.vel, st.rho, st.p, st.m
+        self.counters["extra_sources"] += 1
+        return tuple(np.concatenate([getattr(st, f)] + [getattr(s, f) for s in extra])
+                     for f in ("pos", "vel", "rho", "p", "m"))
+
+    def update_pressure(self):
+        if self.evolves_density:
+            tait_pressure(self.state.rho, self.rho0, self.c0, self.gamma, self.p_background, self.state.p)
+            self.counters["eos"] += 1
+
+    def after_integrate(self, dt):
+        self.pm.hook.sph_after_integrate(sim=self, pos0=self.pos0, pos=self.state.pos, vel=self.state.vel,
+                                         acc=self.acc, dt=dt)
+
+    # -- stepping ---------------------------------------------------------------------
+
+    def choose_dt(self) -> float:
+        tcfg = self.case.config["time"]
+        if tcfg["dt"] is not None:
+            dt = tcfg["dt"]
+        else:
+            vmax, amax = max_norms(self.state.vel, self.acc)
+            dt = adaptive_dt(self.h, self.c0, self.nu, vmax, amax, tcfg["cfl"], tcfg["force_factor"],
+                             tcfg["viscous_factor"])
+            if tcfg["dt_max"] is not None:
+                dt = min(dt, tcfg["dt_max"])
+        bounds = [b for b in self.pm.hook.sph_max_dt(sim=self) if b is not None]
+        if bounds:
+            dt = min(dt, min(bounds))
+        if not math.isfinite(dt):
+            raise CaseError(self.case.file, "time.dt", "required: no sound speed, velocity or force limits the step")
+        remaining = self.t_end - self.t
+        # land exactly on t_end instead of taking a sliver of a step at the end
+        return remaining if remaining <= dt * (1.0 + 1e-6) else dt
+
+    def advance(self):
+        """One complete step."""
+        if self.step % self.case.config["neighbours"]["sort_every"] == 0 and self.sph:
+            self.reorder()
+        self.dt = self.choose_dt()
+        self.integrator.step(self, self.dt)
+        self.t += self.dt
+        self.step += 1
+        if self.step % self.case.config["checks"]["every"] == 0:
+            self.check()
+        self.pm.hook.sph_after_step(sim=self)
+
+    def check(self):
+        st, ck = self.state, self.case.config["checks"]
+        code, i, value = checks.scan(st.pos, st.vel, st.rho, ck["rho_min"] * self.rho0, ck["rho_max"] * self.rho0,
+                                     self.evolves_density, self.normals, self.offsets)
+        self.counters["checks"] += 1
+        if code != checks.OK:
+            detail = f"{checks.REASONS[code]}: value {value:.6g}"
+            if code in (checks.RHO_LOW, checks.RHO_HIGH):
+                detail += f" kg/m^3, bounds [{ck['rho_min'] * self.rho0:.6g}, {ck['rho_max'] * self.rho0:.6g}]"
+            raise Instability(self.step, self.t, int(st.id[i]), detail)
+
+    def output(self, final=False):
+        self.pm.hook.sph_output(sim=self, final=final)
+
+    def done(self) -> bool:
+        return self.t_end - self.t <= 1e-9 * (self.dt or self.t_end)
