@@ -27,11 +27,11 @@ from .kernels import kernel_f
 from .neighbours import cell_coords
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def tait_pressure(rho, rho0, c0, gamma, p_background, p):
     """Fill p (Pa) from rho (kg/m^3) with the Tait equation of state."""
     b = c0 * c0 * rho0 / gamma
-    for i in prange(rho.shape[0]):
+    for i in range(rho.shape[0]):  # element-wise: serial (see integrators._drift)
         p[i] = b * ((rho[i] / rho0) ** gamma - 1.0) + p_background
 
 
@@ -109,10 +109,10 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
         drho[i] = dr
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def uniform_acceleration(gravity, acc):
     """acc[i] = gravity for every particle (the only force when SPH is off)."""
     dim = acc.shape[1]
-    for i in prange(acc.shape[0]):
+    for i in range(acc.shape[0]):
         for d in range(dim):
             acc[i, d] = gravity[d]

@@ -10,7 +10,7 @@ the grid has one layer in z, so the same code serves both dimensions.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 
 @njit(cache=True)
@@ -44,9 +44,9 @@ def cell_coords(pos, i, lo, cell_size, ncell):
     return cx, cy, cz
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def _cell_ids(pos, lo, cell_size, ncell, out):
-    for i in prange(pos.shape[0]):
+    for i in range(pos.shape[0]):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
         out[i] = cx + ncell[0] * (cy + ncell[1] * cz)
 
