@@ -32,6 +32,15 @@ CORE: dict[str, dict[str, O]] = {
     "physics": {
         "sph": O(True, "bool", doc="compute SPH forces and density; false: free particles + plugins only"),
         "gravity": O([0.0, -9.81, 0.0], "vector", "m/s^2", "body acceleration; first dim components are used"),
+        "hydrostatic_init": O(True, "bool", doc="start each fluid block with hydrostatic pressure and density below its top"),
+        "modified_pressure": O(False, "bool", doc="Batchelor's modified pressure: the EOS gives P = p - p_hydrostatic, "
+                               "gravity acts as buoyancy g (1 - rho0/rho); for fluid at rest in a container"),
+    },
+    "corrections": {
+        "kernel_gradient": O(False, "bool", doc="Bonet & Lok (1999) corrected kernel gradient, symmetrised "
+                             "(L_i + L_j)/2, restores first-order consistency near walls and the free surface"),
+        "shepard_every": O(0, "int", doc="reinitialise density with a Shepard filter every N steps (Chen et al. 1999 "
+                           "CSPH zeroth-order density correction); 0 is off", min=0),
     },
     "kernel": {
         "name": O("wendland_c2", "str", doc="smoothing kernel", choices=("wendland_c2", "cubic_spline")),

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .kernels import kernel_f
+from .kernels import kernel_f, kernel_w
 from .neighbours import cell_coords
 
 
@@ -37,11 +37,14 @@ def tait_pressure(rho, rho0, c0, gamma, p_background, p):
 
 @njit(cache=True, parallel=True)
 def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, ncell,
-              kernel_id, h, c0, alpha, beta, nu, delta, gravity, acc, drho):
+              kernel_id, h, c0, alpha, beta, nu, delta, gravity, buoyancy, rho0, use_L, L, acc, drho):
     """Accelerations acc (n_dest, dim) in m/s^2 and density rates drho (n_dest,) in kg/m^3/s.
 
     Terms whose coefficient is zero are skipped, so a case without viscosity or density
-    diffusion computes none.
+    diffusion computes none. ``buoyancy``: gravity acts as g (1 - rho0/rho_i) (modified
+    pressure, Batchelor 1967). ``use_L``: the kernel gradient is corrected with the
+    symmetrised Bonet & Lok matrix (L_i + L_j)/2 (antisymmetric in i, j, so momentum is
+    still conserved); sources beyond ``L.shape[0]`` use the identity.
     """
     dim = pos.shape[1]
     eta2 = 0.01 * h * h
@@ -50,6 +53,7 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
     do_lam = nu > 0.0
     do_diff = delta > 0.0
     zr = 1 if dim == 3 else 0
+    n_L = L.shape[0] if use_L else 0
     for i in prange(n_dest):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
         a0 = 0.0
@@ -81,32 +85,158 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
                         if r2 >= r2max:
                             continue
                         f = kernel_f(kernel_id, np.sqrt(r2), h, dim)
+                        g0 = f * x0
+                        g1 = f * x1
+                        g2 = f * x2
+                        if use_L:
+                            g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
                         v0 = vel[i, 0] - vel[j, 0]
                         v1 = vel[i, 1] - vel[j, 1]
                         v2 = vel[i, 2] - vel[j, 2] if dim == 3 else 0.0
                         vx = v0 * x0 + v1 * x1 + v2 * x2
+                        xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
                         mj = m[j]
-                        dr += mj * vx * f
+                        dr += mj * (v0 * g0 + v1 * g1 + v2 * g2)
                         if do_diff:
-                            dr += delta * h * c0 * 2.0 * (rho[i] - rho[j]) * mj / rho[j] * f * r2 / (r2 + eta2)
+                            dr += delta * h * c0 * 2.0 * (rho[i] - rho[j]) * mj / rho[j] * xg / (r2 + eta2)
                         s = pi_r + p[j] / (rho[j] * rho[j])
                         if do_av and vx < 0.0:
                             mu = h * vx / (r2 + eta2)
                             s += (-alpha * c0 * mu + beta * mu * mu) / (0.5 * (rho[i] + rho[j]))
-                        g = -mj * s * f
-                        a0 += g * x0
-                        a1 += g * x1
-                        a2 += g * x2
+                        a0 -= mj * s * g0
+                        a1 -= mj * s * g1
+                        a2 -= mj * s * g2
                         if do_lam:
-                            lam = mj * 4.0 * nu / (rho[i] + rho[j]) * f * r2 / (r2 + eta2)
+                            lam = mj * 4.0 * nu / (rho[i] + rho[j]) * xg / (r2 + eta2)
                             a0 += lam * v0
                             a1 += lam * v1
                             a2 += lam * v2
-        acc[i, 0] = gravity[0] + a0
-        acc[i, 1] = gravity[1] + a1
+        gscale = 1.0 - rho0 / rho[i] if buoyancy else 1.0
+        acc[i, 0] = gscale * gravity[0] + a0
+        acc[i, 1] = gscale * gravity[1] + a1
         if dim == 3:
-            acc[i, 2] = gravity[2] + a2
+            acc[i, 2] = gscale * gravity[2] + a2
         drho[i] = dr
+
+
+@njit(cache=True)
+def _corrected(L, n_L, i, j, g0, g1, g2):
+    """(L_i + L_j)/2 applied to the gradient; L is the identity for rows >= n_L (ghosts)."""
+    a0, a1, a2 = _apply(L, n_L, i, g0, g1, g2)
+    b0, b1, b2 = _apply(L, n_L, j, g0, g1, g2)
+    return 0.5 * (a0 + b0), 0.5 * (a1 + b1), 0.5 * (a2 + b2)
+
+
+@njit(cache=True)
+def _apply(L, n_L, row, g0, g1, g2):
+    # separate calls for i and j: the parfor index and j have different integer types,
+    # and a conditional expression over both would unify them to float64
+    if row >= n_L:
+        return g0, g1, g2
+    return (L[row, 0, 0] * g0 + L[row, 0, 1] * g1 + L[row, 0, 2] * g2,
+            L[row, 1, 0] * g0 + L[row, 1, 1] * g1 + L[row, 1, 2] * g2,
+            L[row, 2, 0] * g0 + L[row, 2, 1] * g1 + L[row, 2, 2] * g2)
+
+
+@njit(cache=True, parallel=True)
+def neighbour_sums(n_dest, pos, rho, m, order, cell_start, lo, cell_size, ncell, kernel_id, h,
+                   want_L, L, want_shepard, shepard):
+    """Per-particle kernel sums over the neighbours (self included where it contributes).
+
+    - L (n_dest, 3, 3): the Bonet & Lok (1999) correction matrix
+      L_i = [sum_j V_j (x_j - x_i) (x) grad_i W_ij]^-1 (identity where the sum is singular);
+    - shepard (n_dest,): the Shepard-filtered density
+      rho_i = sum_j m_j W_ij / sum_j V_j W_ij (Chen et al. 1999, CSPH zeroth order).
+    """
+    dim = pos.shape[1]
+    r2max = (2.0 * h) ** 2
+    zr = 1 if dim == 3 else 0
+    for i in prange(n_dest):
+        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
+        if want_L:
+            for a in range(3):
+                for b in range(3):
+                    L[i, a, b] = 0.0  # accumulates M_i, inverted in place below
+        num = 0.0
+        den = 0.0
+        for dz in range(-zr, zr + 1):
+            z = cz + dz
+            if z < 0 or z >= ncell[2]:
+                continue
+            for dy in range(-1, 2):
+                y = cy + dy
+                if y < 0 or y >= ncell[1]:
+                    continue
+                for dx in range(-1, 2):
+                    x = cx + dx
+                    if x < 0 or x >= ncell[0]:
+                        continue
+                    c = x + ncell[0] * (y + ncell[1] * z)
+                    for k in range(cell_start[c], cell_start[c + 1]):
+                        j = order[k]
+                        x0 = pos[i, 0] - pos[j, 0]
+                        x1 = pos[i, 1] - pos[j, 1]
+                        x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
+                        r2 = x0 * x0 + x1 * x1 + x2 * x2
+                        if r2 >= r2max:
+                            continue
+                        r = np.sqrt(r2)
+                        vj = m[j] / rho[j]
+                        if want_shepard:
+                            w = kernel_w(kernel_id, r, h, dim)
+                            num += m[j] * w
+                            den += vj * w
+                        if want_L and j != i:
+                            # M_ab += V_j (x_j - x_i)_a (grad_i W_ij)_b, grad_i W_ij = f x_ij
+                            c = -vj * kernel_f(kernel_id, r, h, dim)
+                            L[i, 0, 0] += c * x0 * x0
+                            L[i, 0, 1] += c * x0 * x1
+                            L[i, 1, 0] += c * x1 * x0
+                            L[i, 1, 1] += c * x1 * x1
+                            if dim == 3:
+                                L[i, 0, 2] += c * x0 * x2
+                                L[i, 1, 2] += c * x1 * x2
+                                L[i, 2, 0] += c * x2 * x0
+                                L[i, 2, 1] += c * x2 * x1
+                                L[i, 2, 2] += c * x2 * x2
+        if want_shepard:
+            shepard[i] = num / den if den > 0.0 else rho[i]
+        if want_L:
+            _invert_in_place(L, i, dim)
+
+
+@njit(cache=True, inline="always")
+def _invert_in_place(L, i, dim):
+    """L[i] <- inverse of L[i] (2x2 or 3x3 block); identity where it is near singular
+    (isolated particles: keep the plain gradient)."""
+    m00, m01, m02 = L[i, 0, 0], L[i, 0, 1], L[i, 0, 2]
+    m10, m11, m12 = L[i, 1, 0], L[i, 1, 1], L[i, 1, 2]
+    m20, m21, m22 = L[i, 2, 0], L[i, 2, 1], L[i, 2, 2]
+    for a in range(3):
+        for b in range(3):
+            L[i, a, b] = 1.0 if a == b else 0.0
+    if dim == 2:
+        det = m00 * m11 - m01 * m10
+        if abs(det) > 1e-3:
+            L[i, 0, 0] = m11 / det
+            L[i, 0, 1] = -m01 / det
+            L[i, 1, 0] = -m10 / det
+            L[i, 1, 1] = m00 / det
+        return
+    c00 = m11 * m22 - m12 * m21
+    c01 = m12 * m20 - m10 * m22
+    c02 = m10 * m21 - m11 * m20
+    det = m00 * c00 + m01 * c01 + m02 * c02
+    if abs(det) > 1e-3:
+        L[i, 0, 0] = c00 / det
+        L[i, 1, 0] = c01 / det
+        L[i, 2, 0] = c02 / det
+        L[i, 0, 1] = (m02 * m21 - m01 * m22) / det
+        L[i, 1, 1] = (m00 * m22 - m02 * m20) / det
+        L[i, 2, 1] = (m01 * m20 - m00 * m21) / det
+        L[i, 0, 2] = (m01 * m12 - m02 * m11) / det
+        L[i, 1, 2] = (m02 * m10 - m00 * m12) / det
+        L[i, 2, 2] = (m00 * m11 - m01 * m10) / det
 
 
 @njit(cache=True)

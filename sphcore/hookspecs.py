@@ -62,6 +62,17 @@ def sph_setup(sim):
 
 
 @hookspec
+def sph_before_forces(sim):
+    """Adjust the fields that feed a force evaluation.
+
+    Fires at the start of every force evaluation, after the equation of state and before
+    extra sources and the neighbour search. May change ``sim.state.p`` and ``sim.state.rho``
+    (e.g. hold free-surface particles at zero pressure, filter the density); must not move
+    particles.
+    """
+
+
+@hookspec
 def sph_extra_sources(sim):
     """Return extra *source* particles for this force evaluation, or None.
 
@@ -125,10 +136,12 @@ def sph_max_dt(sim):
 def sph_output(sim, final):
     """Write output if this writer's schedule says so.
 
-    Fires after the set-up (``sim.step == 0``), after every step, and once more with
-    ``final=True`` when the run ends or stops on an instability (then ``sim`` holds the
-    last good state). Each writer owns its schedule, files and directory layout below
-    ``sim.output_dir``. Must not change particle data.
+    Fires after the set-up (``sim.step == 0``, unless the run restarts from a checkpoint),
+    after every step, and once more with ``final=True`` when the run reaches its end or is
+    stopped by a signal. After an instability it does not fire again, so the files keep the
+    last good frame. Each writer owns its schedule, files and directory layout below
+    ``sim.output_dir``; ``sim.restarting`` tells it to append to what is there. Must not
+    change particle data.
     """
 
 

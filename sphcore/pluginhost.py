@@ -84,7 +84,7 @@ def check(pm: pluggy.PluginManager) -> None:
     try:
         pm.check_pending()
     except pluggy.PluginValidationError as e:
-        raise PluginLoadError(f"plugin {getattr(e, 'plugin_name', '?')!r}: {e}") from e
+        raise PluginLoadError(f"plugin {pm.get_name(e.plugin) or '?'!r}: {e}") from e
 
 
 def hooks_of(pm: pluggy.PluginManager, name: str) -> list[str]:

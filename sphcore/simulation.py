@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import checks
-from .equations import sph_rates, tait_pressure, uniform_acceleration
+from .equations import neighbour_sums, sph_rates, tait_pressure, uniform_acceleration
 from .errors import CaseError, Instability
 from .integrators import SCHEMES
 from .kernels import KERNEL_IDS, SUPPORT
@@ -43,6 +43,21 @@ def build_state(case) -> ParticleState:
                             f"(distance {d[i, p]:.6g} m < radius {r:.6g} m)")
         state.append(make_block(pos, b["velocity"], rho0, dx, r, KIND_CODES[b["kind"]]))
     return state
+
+
+def block_tops(case, state) -> np.ndarray:
+    """For each particle, the height (m, along -g) of the top of its block: its free surface
+    at rest. Blocks are appended in order, so particle ids run block by block."""
+    g = np.linalg.norm(case.gravity)
+    up = -case.gravity[: case.dim] / g if g > 0 else np.zeros(case.dim)
+    z = state.pos @ up
+    tops = np.empty(state.n)
+    start = 0
+    for b in case.blocks:
+        n_b = lattice(b["min"], b["max"], case.dx, b["count"]).shape[0]
+        tops[start:start + n_b] = z[start:start + n_b].max() + 0.5 * case.dx
+        start += n_b
+    return tops
 
 
 def reference_sound_speed(case, state) -> float:
@@ -83,6 +98,16 @@ class Simulation:
         self.delta = cfg["density_diffusion"]["delta"]
         self.c0 = reference_sound_speed(case, self.state) if self.sph else 0.0
         self.gamma, self.p_background = cfg["eos"]["gamma"], cfg["eos"]["p_background"]
+        self.g_abs = float(np.linalg.norm(self.gravity))
+        self.up = -self.gravity[: case.dim] / self.g_abs if self.g_abs > 0 else np.zeros(case.dim)
+        self.modified_pressure = self.sph and cfg["physics"]["modified_pressure"]
+        self.kernel_gradient = self.sph and cfg["corrections"]["kernel_gradient"]
+        self.shepard_every = cfg["corrections"]["shepard_every"] if self.sph else 0
+        if self.sph and self.g_abs > 0:
+            tops = block_tops(case, self.state)
+            self.surface_level = float(tops.max())  # hydrostatic reference of the modified pressure (m)
+            if cfg["physics"]["hydrostatic_init"] and not self.modified_pressure:
+                self._hydrostatic_start(tops)
         self.integrator = SCHEMES[cfg["integrator"]["scheme"]]()
         self.normals = np.ascontiguousarray(case.planes.normals)
         self.offsets = np.ascontiguousarray(case.planes.offsets)
@@ -90,6 +115,14 @@ class Simulation:
         pm.hook.sph_setup(sim=self)
         self._allocate()
         self.update_pressure()
+
+    def _hydrostatic_start(self, tops):
+        """p = rho0 g (top - z) below each block's top, rho from the inverse Tait equation."""
+        st = self.state
+        fluid = st.kind == FLUID
+        p = self.rho0 * self.g_abs * (tops - st.pos @ self.up)
+        b = self.c0 ** 2 * self.rho0 / self.gamma
+        st.rho[fluid] = self.rho0 * (p[fluid] / b + 1.0) ** (1.0 / self.gamma)
 
     # -- work arrays ------------------------------------------------------------------
 
@@ -100,6 +133,9 @@ class Simulation:
         self.acc_old = np.zeros((n, dim)) if self.integrator.name == "leapfrog" else self.acc
         self.drho = np.zeros(n) if self.evolves_density else None
         self.drho_old = np.zeros(n) if self.evolves_density and self.integrator.name == "leapfrog" else None
+        self.p_dyn = np.zeros(n) if self.modified_pressure else None
+        self.L = np.zeros((n if self.kernel_gradient else 1, 3, 3))
+        self.shepard = np.zeros(n if self.shepard_every else 1)
 
     def reorder(self):
         """Sort particles by cell so that neighbours are near in memory (ids keep identity)."""
@@ -109,6 +145,7 @@ class Simulation:
         self.acc[:] = self.acc[order]
         if self.drho is not None:
             self.drho[:] = self.drho[order]
+        self.update_pressure()  # derived arrays (modified pressure) follow the new order
         self.counters["reorder"] += 1
 
     # -- rates ------------------------------------------------------------------------
@@ -120,15 +157,17 @@ class Simulation:
         if not self.sph:
             uniform_acceleration(self.gravity, self.acc)
         else:
+            self.pm.hook.sph_before_forces(sim=self)
             pos, vel, rho, p, m = self._sources()
-            try:
-                grid = CellGrid(pos, SUPPORT * self.h)
-            except OverflowError as e:
-                raise Instability(self.step, self.t, -1, f"particles spread far apart ({e})") from None
-            self.counters["neighbour_search"] += 1
+            grid = self._grid(pos)
+            if self.kernel_gradient:
+                neighbour_sums(st.n, pos, rho, m, grid.order, grid.cell_start, grid.lo, grid.cell_size, grid.ncell,
+                               self.kernel_id, self.h, True, self.L, False, self.shepard)
+                self.counters["kernel_gradient_correction"] += 1
             sph_rates(st.n, pos, vel, rho, p, m, grid.order, grid.cell_start, grid.lo, grid.cell_size, grid.ncell,
                       self.kernel_id, self.h, self.c0, self.alpha, self.beta, self.nu, self.delta,
-                      self.gravity, self.acc, self.drho)
+                      self.gravity, self.modified_pressure, self.rho0, self.kernel_gradient, self.L,
+                      self.acc, self.drho)
             self.counters["continuity"] += 1
             self.counters["momentum"] += 1
             if self.alpha > 0 or self.beta > 0:
@@ -139,21 +178,55 @@ class Simulation:
                 self.counters["density_diffusion"] += 1
         self.pm.hook.sph_accelerations(sim=self, acc=self.acc)
 
+    def _grid(self, pos):
+        try:
+            grid = CellGrid(pos, SUPPORT * self.h)
+        except OverflowError as e:
+            raise Instability(self.step, self.t, -1, f"particles spread far apart ({e})") from None
+        self.counters["neighbour_search"] += 1
+        return grid
+
     def _sources(self):
-        """The fluid followed by any plugin source particles (ghosts)."""
+        """The fluid followed by any plugin source particles (ghosts); the pressure is the
+        one the momentum equation uses (``force_pressure``)."""
         st = self.state
         extra = [s for s in self.pm.hook.sph_extra_sources(sim=self) if s is not None and s.n]
         self.n_sources = sum(s.n for s in extra)
+        fluid = (st.pos, st.vel, st.rho, self.force_pressure, st.m)
         if not extra:
-            return st.pos, st.vel, st.rho, st.p, st.m
+            return fluid
         self.counters["extra_sources"] += 1
-        return tuple(np.concatenate([getattr(st, f)] + [getattr(s, f) for s in extra])
-                     for f in ("pos", "vel", "rho", "p", "m"))
+        return tuple(np.concatenate([a] + [getattr(s, f) for s in extra])
+                     for a, f in zip(fluid, ("pos", "vel", "rho", "p", "m")))
+
+    @property
+    def force_pressure(self) -> np.ndarray:
+        """Pressure in the momentum equation (Pa): the Tait pressure, or with modified
+        pressure its dynamic part P = p - rho0 g (surface_level - z) (hydrostatic removed)."""
+        return self.p_dyn if self.modified_pressure else self.state.p
 
     def update_pressure(self):
-        if self.evolves_density:
-            tait_pressure(self.state.rho, self.rho0, self.c0, self.gamma, self.p_background, self.state.p)
-            self.counters["eos"] += 1
+        """Equation of state; with modified pressure, state.p is the physical pressure
+        P + rho0 g (surface_level - z), for output."""
+        if not self.evolves_density:
+            return
+        st = self.state
+        tait_pressure(st.rho, self.rho0, self.c0, self.gamma, self.p_background, self.force_pressure)
+        if self.modified_pressure:
+            st.p[:] = self.p_dyn + self.rho0 * self.g_abs * (self.surface_level - st.pos @ self.up)
+        self.counters["eos"] += 1
+
+    def shepard_filter(self):
+        """Density <- Shepard-filtered density (Chen et al. 1999, CSPH zeroth order)."""
+        st = self.state
+        grid = self._grid(st.pos)
+        neighbour_sums(st.n, st.pos, st.rho, st.m, grid.order, grid.cell_start, grid.lo, grid.cell_size,
+                       grid.ncell, self.kernel_id, self.h, False, self.L, True, self.shepard)
+        st.rho[:] = self.shepard
+        self.update_pressure()
+        if hasattr(self.integrator, "invalidate"):
+            self.integrator.invalidate()
+        self.counters["shepard_filter"] += 1
 
     def after_integrate(self, dt):
         self.pm.hook.sph_after_integrate(sim=self, pos0=self.pos0, pos=self.state.pos, vel=self.state.vel,
@@ -184,6 +257,8 @@ class Simulation:
         """One complete step."""
         if self.step % self.case.config["neighbours"]["sort_every"] == 0 and self.sph:
             self.reorder()
+        if self.shepard_every and self.step > 0 and self.step % self.shepard_every == 0:
+            self.shepard_filter()
         self.dt = self.choose_dt()
         self.integrator.step(self, self.dt)
         self.t += self.dt

@@ -1,0 +1,296 @@
+"""netCDF output: every frame of a run appended to one CF-style file, ``particles.nc``.
+
+Dimensions ``time`` (unlimited), ``particle`` (fixed for the run), ``spatial`` (dim).
+Per frame: time (s), step, position (m), velocity (m/s), density (kg/m^3), pressure (Pa);
+once: mass (kg), radius (m), kind, id. Particles are stored sorted by id, so index i along
+``particle`` is the same particle in every frame whatever order the core keeps them in.
+The validated case is copied into global attributes named ``section.key``.
+
+The file is netCDF-3 64-bit-data (CDF-5) rather than netCDF-4/HDF5, because
+- HDF5 locks the file while the run has it open, so a second process (a notebook
+  watching the run, a post-processing script) could not read it;
+- a CDF-5 file is a header plus appended records: after ``sync`` the header counts only
+  complete frames, and a killed run leaves a file that opens with all of them;
+- it still holds int64 and float64 exactly (the classic format has no int64).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import re
+from pathlib import Path
+
+import netCDF4
+import numpy as np
+
+import sphcore
+from sphcore.errors import OutputError
+from sphcore.hookspecs import hookimpl
+from sphcore.particles import FLUID, GHOST, SPHERE
+
+from .schedule import Schedule, schedule_options
+
+TABLE = "netcdf"
+FILE_NAME = "particles.nc"
+FORMAT = "NETCDF3_64BIT_DATA"
+
+# name: (dimensions, dtype, attributes). No CF standard name exists for a generic
+# fluid's velocity, density or pressure: the candidates (sea_water_pressure,
+# sea_water_density, sea_water_x_velocity, ...) assert sea water and absolute pressure
+# (including the atmosphere above), which a Tait-EOS particle pressure is not.
+FRAME_VARS = {
+    "position": (("time", "particle", "spatial"), "f8", {"units": "m", "long_name": "particle position"}),
+    "velocity": (("time", "particle", "spatial"), "f8", {"units": "m s-1", "long_name": "particle velocity"}),
+    "density": (("time", "particle"), "f8", {"units": "kg m-3", "long_name": "particle density"}),
+    "pressure": (("time", "particle"), "f8",
+                 {"units": "Pa", "long_name": "particle pressure from the equation of state"}),
+    "step": (("time",), "i8", {"units": "1", "long_name": "time step index"}),
+    # a frame's time is set to NaN first and to t last: a complete frame has a time
+    "time": (("time",), "f8", {"units": "s", "standard_name": "time", "long_name": "simulated time since the start of the run"}),
+}
+STATIC_VARS = {
+    "mass": ("f8", "m", {"units": "kg", "long_name": "particle mass"}),
+    "radius": ("f8", "radius", {"units": "m", "long_name": "particle radius for wall contact"}),
+    "kind": ("i1", "kind", {"units": "1", "long_name": "particle kind",
+                            "flag_values": np.array([FLUID, SPHERE, GHOST], np.int8),
+                            "flag_meanings": "fluid sphere ghost"}),
+    "id": ("i8", "id", {"units": "1", "long_name": "particle identifier, stable across the run"}),
+}
+STATE_OF = {"position": "pos", "velocity": "vel", "density": "rho", "pressure": "p"}
+
+
+def case_attributes(config: dict, prefix: str = "") -> dict:
+    """Flatten ``{section: {key: value}}`` into netCDF global attributes ``section.key``.
+
+    Numbers stay numbers (bools become the strings "true"/"false": netCDF has no boolean),
+    non-empty lists of numbers become arrays, any other list (strings, tables) a JSON
+    string; None (an unset derived value) is left out.
+    """
+    out = {}
+    for key, value in config.items():
+        name = re.sub(r"[^A-Za-z0-9_.+-]", "_", f"{prefix}{key}")
+        if value is None:
+            continue
+        if isinstance(value, dict):
+            out.update(case_attributes(value, name + "."))
+        elif isinstance(value, bool):
+            out[name] = "true" if value else "false"
+        elif isinstance(value, (int, np.integer)):
+            out[name] = np.int64(value)
+        elif isinstance(value, (float, np.floating)):
+            out[name] = np.float64(value)
+        elif isinstance(value, str):
+            out[name] = value
+        elif isinstance(value, (list, tuple)) and value and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value
+        ):
+            kind = np.int64 if all(isinstance(v, int) for v in value) else np.float64
+            out[name] = np.asarray(value, dtype=kind)
+        else:
+            out[name] = json.dumps(value, default=str)
+    return out
+
+
+def _fail(path: Path, what: str, err: Exception) -> OutputError:
+    reason = getattr(err, "strerror", None) or str(err)
+    return OutputError(f"{path}: cannot {what}: {reason}")
+
+
+class NetcdfWriter:
+    """Pluggy plugin ``netcdf``: all frames in ``<output_dir>/particles.nc`` on the ``[netcdf]`` schedule."""
+
+    def __init__(self):
+        self.schedule = Schedule()  # replaced from the case in sph_configure
+        self.ds: netCDF4.Dataset | None = None  # opened at the first frame due, not before
+        self.path: Path | None = None
+        self.row = 0  # index along time of the next frame
+        self.ids: np.ndarray | None = None  # the file's particle ids (sorted)
+        self._failed = False  # after an OutputError, stay silent (the run is stopping)
+        self._restart_pending = False
+
+    # ---------------------------------------------------------------- hooks
+
+    @hookimpl
+    def sph_options(self):
+        return {TABLE: schedule_options("netCDF frame")}
+
+    @hookimpl
+    def sph_configure(self, case):
+        self.schedule = Schedule.from_config(case, TABLE)
+
+    @hookimpl
+    def sph_setup(self, sim):
+        # A restart's files are put in order at the first output call, not here: the core
+        # fires sph_setup before it loads the checkpoint, so sim.t and sim.step are not
+        # yet those of the restart point.
+        self._restart_pending = bool(getattr(sim, "restarting", False))
+
+    @hookimpl
+    def sph_output(self, sim, final):
+        if self._failed:
+            return
+        try:
+            if self._restart_pending:
+                self._restart_pending = False
+                self.reopen_for_restart(sim)
+            if self.schedule.due(sim.t, sim.step, final):
+                self.write_frame(sim)
+        except OutputError:
+            self._failed = True
+            raise
+
+    @hookimpl
+    def sph_summary(self, sim):
+        return {"netcdf_frames": self.row} if self.row else None
+
+    @hookimpl
+    def sph_finish(self, sim):
+        self.close()
+
+    # ---------------------------------------------------------------- writing
+
+    def close(self) -> None:
+        """Close the file (idempotent)."""
+        if self.ds is None:
+            return
+        try:
+            self.ds.sync()
+        except (OSError, RuntimeError) as err:
+            self._abandon()
+            raise _fail(self.path, "close", err) from err
+        ds, self.ds = self.ds, None
+        ds.close()
+
+    def _abandon(self) -> None:
+        """Drop the dataset after a failed write without calling close().
+
+        netCDF4-python keeps a dataset whose close() failed marked open and closes it again
+        when it is garbage-collected, which crashes the interpreter (double free in
+        libnetcdf). Letting the collector close it once is safe; the frames synced before
+        stay readable.
+        """
+        self.ds = None
+        self._failed = True
+
+    def write_frame(self, sim) -> None:
+        """Append the current state as the next frame and sync it to disk."""
+        if sim.output_dir is None:
+            raise OutputError("netcdf: this run has no output directory")
+        st = sim.state
+        order = np.argsort(st.id, kind="stable")
+        if self.ds is None:
+            if st.n == 0:  # a netCDF dimension of length 0 would be a second unlimited one
+                raise OutputError(f"{Path(sim.output_dir) / FILE_NAME}: no particles to write")
+            self._create(sim, st, order)
+        ids = st.id[order]
+        if not np.array_equal(ids, self.ids):
+            raise OutputError(
+                f"{self.path}: the set of particles changed ({len(self.ids)} in the file, "
+                f"{len(ids)} now); one netCDF file needs the same particles in every frame")
+        try:
+            # time = NaN first: should a write fail mid-frame (disk full), the library may
+            # still count the record, and the partial frame then reads as time = NaN.
+            self.ds["time"][self.row] = np.nan
+            for name, field in STATE_OF.items():
+                self.ds[name][self.row] = getattr(st, field)[order]
+            self.ds["step"][self.row] = int(sim.step)
+            self.ds["time"][self.row] = float(sim.t)  # last: a frame with a time is complete
+            # sync: header and data on disk now, so a killed run keeps this frame
+            self.ds.sync()
+        except (OSError, RuntimeError) as err:
+            self._abandon()
+            raise _fail(self.path, f"write the frame at step {sim.step}", err) from err
+        self.row += 1
+
+    def _create(self, sim, st, order) -> None:
+        self.path = Path(sim.output_dir) / FILE_NAME
+        try:
+            ds = netCDF4.Dataset(self.path, "w", format=FORMAT)
+        except (OSError, RuntimeError) as err:
+            raise _fail(self.path, "create the netCDF file", err) from err
+        try:
+            ds.set_auto_maskandscale(False)
+            ds.createDimension("time", None)
+            ds.createDimension("particle", st.n)
+            ds.createDimension("spatial", st.dim)
+            case = sim.case
+            ds.setncatts({
+                "Conventions": "CF-1.8",
+                "title": f"sphcore particles: {getattr(case, 'name', '')}",
+                "source": f"sphcore {sphcore.__version__}",
+                "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} created by sphcore",
+                "comment": "particles sorted by id; the case's parameters follow as section.key attributes",
+                **case_attributes(getattr(case, "config", {}) or {}),
+            })
+            for name, (dims, dtype, attrs) in FRAME_VARS.items():
+                ds.createVariable(name, dtype, dims, fill_value=False).setncatts(attrs)
+            for name, (dtype, field, attrs) in STATIC_VARS.items():
+                var = ds.createVariable(name, dtype, ("particle",), fill_value=False)
+                var.setncatts(attrs)
+                var[:] = getattr(st, field)[order]
+            ds.sync()
+        except (OSError, RuntimeError) as err:
+            del ds  # not close(): see _abandon
+            self._failed = True
+            raise _fail(self.path, "write the netCDF header", err) from err
+        self.ds, self.row, self.ids = ds, 0, st.id[order].copy()
+
+    # ---------------------------------------------------------------- restart
+
+    def reopen_for_restart(self, sim) -> None:
+        """Reopen ``particles.nc`` of an earlier run and go on appending; frames up to ``sim.step`` stay.
+
+        Called with ``sim`` at the restart point or at the first step after it (the first
+        output of a restarted run). Frames after ``sim.step`` (written after the checkpoint)
+        are dropped by rewriting the file without them, as a netCDF record dimension cannot
+        shrink; a frame at ``sim.step`` itself holds the same state (checkpoints restart bit
+        for bit) and stays. The particle dimension stays; the schedule counts the kept
+        frames as written.
+        """
+        path = Path(sim.output_dir or ".") / FILE_NAME
+        if sim.output_dir is None or not path.exists():
+            return  # nothing written before: the first frame creates the file
+        try:
+            with netCDF4.Dataset(path) as src:
+                src.set_auto_maskandscale(False)
+                steps, times = src["step"][:], src["time"][:]
+            # frames to keep: the leading ones up to the restart step (a NaN time marks
+            # a frame left incomplete by a failed write)
+            ok = np.isfinite(times) & (steps <= sim.step)
+            keep = len(ok) if ok.all() else int(np.argmin(ok))
+            if keep < len(steps):
+                _rewrite_first(path, keep)
+            ds = netCDF4.Dataset(path, "a")
+            ds.set_auto_maskandscale(False)
+            ids = ds["id"][:]
+        except (OSError, RuntimeError, KeyError, IndexError) as err:
+            raise _fail(path, "reopen the netCDF file to restart", err) from err
+        self.ds, self.path, self.row, self.ids = ds, path, keep, ids
+        if keep:
+            t_last = float(times[keep - 1])
+            self.schedule.resume(t_last, int(steps[keep - 1]) if steps[keep - 1] == sim.step else None)
+
+
+def _rewrite_first(path: Path, keep: int) -> None:
+    """Replace ``path`` by a copy holding only its first ``keep`` frames (atomic rename)."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        with netCDF4.Dataset(path) as src, netCDF4.Dataset(tmp, "w", format=src.data_model) as dst:
+            src.set_auto_maskandscale(False)
+            dst.set_auto_maskandscale(False)
+            dst.setncatts({k: src.getncattr(k) for k in src.ncattrs()})
+            for name, dim in src.dimensions.items():
+                dst.createDimension(name, None if dim.isunlimited() else len(dim))
+            for name, var in src.variables.items():
+                out = dst.createVariable(name, var.dtype, var.dimensions, fill_value=False)
+                out.setncatts({k: var.getncattr(k) for k in var.ncattrs()})
+                if "time" not in var.dimensions:
+                    out[:] = var[:]
+            for i in range(keep):  # frame by frame: a run's frames need not fit in memory
+                for name, var in src.variables.items():
+                    if "time" in var.dimensions:
+                        dst[name][i] = var[i]
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)  # only still there if something failed

@@ -1,0 +1,205 @@
+"""VTU output for ParaView: one ``.vtu`` per frame and one ``.pvd`` collection per run.
+
+Layout below ``sim.output_dir``::
+
+    <name>.pvd              the collection: every frame with its simulated time (s)
+    vtu/<name>_000000.vtu   one unstructured grid of vertex cells per frame
+
+Each frame holds the particles sorted by id (the core reorders them by cell), so point i
+is the same particle in every frame. 2D runs are padded to 3D points (z = 0) and 3-vector
+velocities, which is what ParaView's glyph and stream filters expect. Every file is written
+to a temporary name in its own directory and then renamed, so a killed or failed run never
+leaves a half-written frame or collection behind.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import meshio
+import numpy as np
+
+from sphcore.errors import OutputError
+from sphcore.hookspecs import hookimpl
+
+from .schedule import Schedule, schedule_options
+
+TABLE = "vtu"
+
+
+def run_name(sim) -> str:
+    """A file-name-safe label for the run: the case name, or "particles" when empty."""
+    name = str(getattr(sim.case, "name", "") or "")
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "particles"
+
+
+def replace_atomically(path: Path, write) -> None:
+    """Call ``write(tmp_path)``, then rename the result over ``path``.
+
+    The temporary file lives in the same directory so that the rename is atomic (same
+    file system); a failure removes it and raises OutputError naming ``path``.
+    """
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as err:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass  # the directory itself is unwritable: nothing was left behind
+        reason = err.strerror or str(err)
+        raise OutputError(f"{path}: cannot write: {reason}") from err
+
+
+def frame_mesh(state) -> meshio.Mesh:
+    """The particles as a meshio Mesh of vertex cells, sorted by id, padded to 3D.
+
+    Point data: velocity (m/s, 3 components), pressure (Pa), density (kg/m^3), mass (kg),
+    radius (m), kind, id. The frame time lives in the .pvd: meshio 5.3's VTU writer drops
+    field data, so a per-file TimeValue cannot be stored through it.
+    """
+    order = np.argsort(state.id, kind="stable")
+    n, dim = state.pos.shape
+    points = np.zeros((n, 3))
+    points[:, :dim] = state.pos[order]
+    velocity = np.zeros((n, 3))
+    velocity[:, :dim] = state.vel[order]
+    point_data = {
+        "velocity": velocity,
+        "pressure": np.ascontiguousarray(state.p[order], dtype=np.float64),
+        "density": np.ascontiguousarray(state.rho[order], dtype=np.float64),
+        "mass": np.ascontiguousarray(state.m[order], dtype=np.float64),
+        "radius": np.ascontiguousarray(state.radius[order], dtype=np.float64),
+        "kind": np.ascontiguousarray(state.kind[order], dtype=np.int8),
+        "id": np.ascontiguousarray(state.id[order], dtype=np.int64),
+    }
+    cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
+    return meshio.Mesh(points, cells, point_data=point_data)
+
+
+def pvd_text(frames: list[tuple[float, str]]) -> str:
+    """A ParaView collection listing ``(time in s, path relative to the pvd)`` frames."""
+    root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
+    coll = ET.SubElement(root, "Collection")
+    for t, rel in frames:
+        # repr() gives the shortest string that reads back as the same float64
+        ET.SubElement(coll, "DataSet", timestep=repr(float(t)), group="", part="0", file=rel)
+    ET.indent(root)
+    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def read_pvd(path: Path) -> list[tuple[float, str]]:
+    """The ``(time, relative file)`` frames of a collection written by :func:`pvd_text`."""
+    root = ET.parse(path).getroot()
+    return [(float(e.get("timestep")), e.get("file")) for e in root.iter("DataSet")]
+
+
+class VtuWriter:
+    """Pluggy plugin ``vtu``: particle frames for ParaView on the ``[vtu]`` schedule."""
+
+    def __init__(self):
+        self.schedule = Schedule()  # replaced from the case in sph_configure
+        self.frames: list[tuple[float, str]] = []  # (t in s, file relative to output_dir)
+        self._failed = False  # after an OutputError, stay silent (the run is stopping)
+        self._restart_pending = False
+
+    # ---------------------------------------------------------------- hooks
+
+    @hookimpl
+    def sph_options(self):
+        return {TABLE: schedule_options("VTU frame")}
+
+    @hookimpl
+    def sph_configure(self, case):
+        self.schedule = Schedule.from_config(case, TABLE)
+
+    @hookimpl
+    def sph_setup(self, sim):
+        # A restart's files are put in order at the first output call, not here: the core
+        # fires sph_setup before it loads the checkpoint, so sim.t and sim.step are not
+        # yet those of the restart point.
+        self._restart_pending = bool(getattr(sim, "restarting", False))
+
+    @hookimpl
+    def sph_output(self, sim, final):
+        if self._failed:
+            return
+        try:
+            if self._restart_pending:
+                self._restart_pending = False
+                self.reopen_for_restart(sim)
+            if self.schedule.due(sim.t, sim.step, final):
+                self.write_frame(sim)
+        except OutputError:
+            self._failed = True
+            raise
+
+    @hookimpl
+    def sph_summary(self, sim):
+        return {"vtu_frames": len(self.frames)} if self.frames else None
+
+    @hookimpl
+    def sph_finish(self, sim):
+        pass  # every file is complete and closed once its frame is written
+
+    # ---------------------------------------------------------------- writing
+
+    def pvd_path(self, sim) -> Path:
+        return Path(sim.output_dir) / f"{run_name(sim)}.pvd"
+
+    def write_frame(self, sim) -> Path:
+        """Write the current state as the next frame and rewrite the collection; returns the .vtu."""
+        if sim.output_dir is None:
+            raise OutputError("vtu: this run has no output directory")
+        out = Path(sim.output_dir)
+        name = run_name(sim)
+        rel = f"vtu/{name}_{len(self.frames):06d}.vtu"
+        path = out / rel
+        try:
+            path.parent.mkdir(exist_ok=True)
+        except OSError as err:
+            raise OutputError(f"{path.parent}: cannot create directory: {err.strerror or err}") from err
+        mesh = frame_mesh(sim.state)
+        # binary: base64 of the raw float64 bytes, so the file holds exact values
+        replace_atomically(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu", binary=True))
+        self.frames.append((float(sim.t), rel))
+        text = pvd_text(self.frames)
+        replace_atomically(self.pvd_path(sim), lambda tmp: tmp.write_text(text))
+        return path
+
+    def reopen_for_restart(self, sim) -> None:
+        """Continue the collection of an earlier run; frames up to ``sim.t`` are kept.
+
+        Called with ``sim`` at the restart point or at the first step after it (the first
+        output of a restarted run). Frames later than ``sim.t`` (written after the
+        checkpoint) are dropped from the collection and their files removed; a frame at
+        ``sim.t`` itself holds the same state (checkpoints restart bit for bit) and stays.
+        Numbering goes on after the frames kept; the schedule counts them as written.
+        """
+        if sim.output_dir is None or not self.pvd_path(sim).exists():
+            return  # nothing written before: numbering starts at 0
+        pvd = self.pvd_path(sim)
+        try:
+            frames = read_pvd(pvd)
+        except (OSError, ET.ParseError) as err:
+            raise OutputError(f"{pvd}: cannot read the collection to restart: {err}") from err
+        # exact comparison: both times are the same float64 (repr round-trips)
+        keep = [f for f in frames if f[0] <= sim.t]
+        frame_dir = (Path(sim.output_dir) / "vtu").resolve()
+        for _, rel in (f for f in frames if f[0] > sim.t):
+            stale = (Path(sim.output_dir) / rel).resolve()
+            if stale.parent != frame_dir:
+                continue  # not a frame of ours (an edited collection): never delete it
+            try:
+                stale.unlink(missing_ok=True)
+            except OSError as err:
+                raise OutputError(f"{stale}: cannot remove: {err.strerror}") from err
+        self.frames = keep
+        replace_atomically(pvd, lambda tmp: tmp.write_text(pvd_text(keep)))
+        if keep:
+            t_last = keep[-1][0]
+            self.schedule.resume(t_last, sim.step if t_last == sim.t else None)
