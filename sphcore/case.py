@@ -141,7 +141,7 @@ def _planes(file, cfg, dim) -> Planes:
     planes = Planes.from_lists(normals, points)
     u = recession_direction(planes.normals)
     if u is not None:
-        raise CaseError(file, "domain.planes", f"the planes bound no region: it is open along {np.round(u, 6).tolist()}")
+        raise CaseError(file, "domain.planes", f"the planes bound no region: it is open along {(np.round(u, 6) + 0.0).tolist()}")
     return planes
 
 
@@ -153,6 +153,8 @@ def _blocks(file, cfg, dim):
         key = f"blocks[{k}]"
         b = validate_table(defaults.BLOCK, entry, file, key)
         b["min"] = _vector(file, f"{key}.min", b["min"], dim)
+        if b["count"] is not None and b["max"] is not None:
+            raise CaseError(file, f"{key}.count", "give either count or max, not both")
         if b["count"] is not None:
             if len(b["count"]) != dim or not all(isinstance(c, int) and not isinstance(c, bool) and c > 0 for c in b["count"]):
                 raise CaseError(file, f"{key}.count", f"expected {dim} positive integers")
@@ -163,6 +165,9 @@ def _blocks(file, cfg, dim):
             if np.any(b["max"] <= b["min"]):
                 raise CaseError(file, f"{key}.max", "expected every component above min")
         b["velocity"] = np.zeros(dim) if b["velocity"] is None else _vector(file, f"{key}.velocity", b["velocity"], dim)
+        if b["kind"] == "sphere" and cfg["physics"]["sph"]:
+            raise CaseError(file, f"{key}.kind", "rigid spheres take no SPH forces: set physics.sph = false "
+                            "(mixing spheres with SPH fluid is not modelled)")
         out.append(b)
     return out
 

@@ -40,22 +40,31 @@ def save(sim, directory: Path) -> Path:
     return path
 
 
-def load(sim, directory: Path) -> dict:
-    """Restore ``sim`` from ``directory``/checkpoint.npz; returns the checkpoint's metadata."""
+def read(directory: Path) -> tuple[dict, dict]:
+    """(metadata, arrays) of ``directory``/checkpoint.npz."""
     path = Path(directory) / NAME
     if not path.exists():
         raise CaseError(path, "--restart", "no checkpoint to restart from in this output directory")
     with np.load(path) as z:
         meta = json.loads(str(z["meta"]))
-        names = [name for name, _ in sim.state.arrays()]
-        sim.state = ParticleState(**{name: z[f"state_{name}"].copy() for name in names})
-        sim._allocate()
-        sim.acc[:] = z["acc"]
-        if sim.drho is not None and "drho" in z:
-            sim.drho[:] = z["drho"]
+        arrays = {k: z[k].copy() for k in z.files if k != "meta"}
+    return meta, arrays
+
+
+def restore_state(sim, meta: dict, arrays: dict) -> None:
+    """Put the checkpoint's particles, clock and statistics into ``sim`` (before set-up)."""
+    names = [name for name, _ in sim.state.arrays()]
+    sim.state = ParticleState(**{name: arrays[f"state_{name}"] for name in names})
     sim.t, sim.step, sim.dt = meta["t"], meta["step"], meta["dt"]
     sim.stats.update(meta["stats"])
     sim.counters.update(meta["counters"])
+
+
+def restore_rates(sim, meta: dict, arrays: dict) -> None:
+    """Put the checkpoint's rates into ``sim``'s work arrays (after allocation), so the
+    leapfrog continues exactly as the uninterrupted run would."""
+    sim.acc[:] = arrays["acc"]
+    if sim.drho is not None and "drho" in arrays:
+        sim.drho[:] = arrays["drho"]
     if hasattr(sim.integrator, "fresh"):
         sim.integrator.fresh = meta["fresh"]
-    return meta

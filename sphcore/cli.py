@@ -1,7 +1,7 @@
 """The ``sph`` command: run, check, plugins.
 
-Exit status: 0 done; 1 the run went unstable (last good output kept); 2 bad input (case,
-options, output directory), nothing written; 128 + signal number when stopped by SIGINT
+Exit status: 0 done; 1 the run went unstable or could not write its output (what was
+written is kept); 2 bad input (case, options, output directory), nothing written; 128 + signal number when stopped by SIGINT
 or SIGTERM after writing a checkpoint.
 """
 
@@ -49,10 +49,11 @@ def main(argv=None) -> int:
             return 0
         if args.command == "check":
             case, pm = runner.load(args.case_dir, args.overrides)
-            from .simulation import build_state
+            from .simulation import Simulation
 
-            state = build_state(case)
-            print(f"{case.file}: ok: {case.dim}D, {state.n} particles, {case.planes.count} wall planes, "
+            sim = Simulation(case, pm)  # particles, sound speed and plugin set-up, no step
+            print(f"{case.file}: ok: {case.dim}D, {sim.state.n} particles, {case.planes.count} wall planes, "
+                  f"h = {sim.h:.4g} m, c0 = {sim.c0:.4g} m/s, "
                   f"plugins: {', '.join(case.config['plugins']['use']) or 'none'}")
             return 0
         summary = runner.run(args.case_dir, args.output, args.overrides, args.t_end, args.overwrite,
@@ -66,7 +67,7 @@ def main(argv=None) -> int:
           f"{summary['n_particles']} particles, {summary['wall_time_s']:.2f} s wall, "
           f"{summary['particle_steps_per_s']:.3g} particle-steps/s, escaped {summary['escaped']}, "
           f"peak memory {summary['peak_memory_mb']:.0f} MB")
-    if status == "unstable":
+    if status in ("unstable", "output_error"):
         return _fail(summary["message"], 1)
     if status == "stopped":
         print(f"sph: {summary['message']}", file=sys.stderr)

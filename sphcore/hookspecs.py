@@ -8,7 +8,10 @@ implementation whose name is not specified here is an error at start-up.
 Arguments are passed by keyword; an implementation may accept any subset of them.
 ``sim`` is the :class:`sphcore.simulation.Simulation`: ``sim.state`` (struct-of-arrays
 particles), ``sim.case`` (validated configuration), ``sim.t``, ``sim.step``, ``sim.dt``,
-``sim.stats`` (a dict of counters that ends up in the run summary).
+``sim.stats`` (a dict of counters that ends up in the run summary), ``sim.output_dir``
+(a pathlib.Path, or None when the simulation runs without an output directory),
+``sim.restarting`` (True when the run continues from a checkpoint: at ``sph_setup`` the
+particles, ``t`` and ``step`` are already those of the checkpoint).
 """
 
 from __future__ import annotations

@@ -61,15 +61,23 @@ class Euler:
 
     name = "euler"
 
+    def __init__(self):
+        self.fresh = False  # are sim.acc/drho the rates of the current state?
+
     def step(self, sim, dt):
         st = sim.state
-        sim.compute_rates()
+        if not self.fresh:
+            sim.compute_rates()
         _drift(sim.pos0, st.pos, st.vel, sim.acc, dt, 0.0)
         _kick(st.vel, sim.acc, dt)
         if sim.evolves_density:
             _kick(st.rho.reshape(-1, 1), sim.drho.reshape(-1, 1), dt)
         sim.after_integrate(dt)
         sim.update_pressure()
+        self.fresh = False
+
+    def invalidate(self):
+        self.fresh = False
 
 
 class Leapfrog:

@@ -99,9 +99,13 @@ def describe() -> list[dict]:
         if info.cls is None:
             rows.append({"name": name, "dist": info.dist, "version": info.version, "hooks": [f"BROKEN: {info.error}"]})
             continue
-        pm = _manager()
-        pm.register(_instance(info), name=name)
-        check(pm)
+        try:
+            pm = _manager()
+            pm.register(_instance(info), name=name)
+            check(pm)
+        except PluginLoadError as e:
+            rows.append({"name": name, "dist": info.dist, "version": info.version, "hooks": [f"BROKEN: {e}"]})
+            continue
         rows.append({"name": name, "dist": info.dist, "version": info.version, "hooks": hooks_of(pm, name)})
     return rows
 
@@ -116,9 +120,12 @@ def option_schemas() -> dict:
     for name, info in sorted(available().items()):
         if info.cls is None:
             continue  # its tables are unknown; using it reports the import error
-        pm = _manager()
-        pm.register(_instance(info), name=name)
-        check(pm)
+        try:
+            pm = _manager()
+            pm.register(_instance(info), name=name)
+            check(pm)
+        except PluginLoadError:
+            continue  # broken: reported when a case selects it (make_manager) or by `sph plugins`
         for declared in pm.hook.sph_options():
             for table, schema in (declared or {}).items():
                 if table in schemas:

@@ -42,9 +42,12 @@ def load(case_dir, overrides=(), t_end=None):
     return case, pm
 
 
-def prepare_output(case, output=None, overwrite=False, restart=False) -> Path:
+def output_path(case, output=None) -> Path:
+    return Path(output) if output is not None else case.dir / case.config["output"]["dir"]
+
+
+def prepare_output(out: Path, overwrite=False, restart=False) -> Path:
     """Create the output directory; never clobber one silently."""
-    out = Path(output) if output is not None else case.dir / case.config["output"]["dir"]
     if out.exists() and any(out.iterdir()) and not restart:
         if not overwrite:
             raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or --output DIR")
@@ -74,10 +77,13 @@ def _write_json(path: Path, data: dict):
 def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restart=False, progress=None,
         quiet=False) -> dict:
     case, pm = load(case_dir, overrides, t_end)
-    out = prepare_output(case, output, overwrite, restart)
+    out = output_path(case, output)
+    if restart and not (out / checkpoint.NAME).exists():
+        raise CaseError(out / checkpoint.NAME, "--restart", "no checkpoint to restart from")
+    # particles and plugins are set up before anything touches the disk: a case that
+    # fails there leaves the output directory as it was
     sim = Simulation(case, pm, out, restarting=restart)
-    if restart:
-        checkpoint.load(sim, out)
+    prepare_output(out, overwrite, restart)
     stop = {"signum": None}
 
     def on_signal(signum, frame):
@@ -86,7 +92,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     mode = "off" if quiet else (progress or case.config["output"]["progress"])
     bar = Progress(sim.t_end, sim.state.n, mode, case.config["output"]["log_interval_s"])
-    start, step0, status, message = time.perf_counter(), sim.step, "completed", ""
+    start, step0, status, message = time.perf_counter(), sim.step, "failed", "an unexpected error (a bug: see the traceback)"
     try:
         if not restart:
             sim.output()
@@ -99,8 +105,11 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
                 raise Stopped(stop["signum"])
         sim.output(final=True)
         checkpoint.save(sim, out)
+        status, message = "completed", ""
     except Instability as e:
         status, message = "unstable", str(e)
+    except OutputError as e:
+        status, message = "output_error", str(e)
     except Stopped as e:
         status, message = "stopped", f"{e}; checkpoint written, continue with --restart"
         stop["stopped_by"] = e.signum

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import checks
+from . import checkpoint, checks
 from .equations import neighbour_sums, sph_rates, tait_pressure, uniform_acceleration
 from .errors import CaseError, Instability
 from .integrators import SCHEMES
@@ -112,8 +112,13 @@ class Simulation:
         self.normals = np.ascontiguousarray(case.planes.normals)
         self.offsets = np.ascontiguousarray(case.planes.offsets)
         self.n_sources = 0
+        saved = checkpoint.read(output_dir) if restarting else None
+        if saved:  # constants above come from the case's initial particles, as in the first run
+            checkpoint.restore_state(self, *saved)
         pm.hook.sph_setup(sim=self)
         self._allocate()
+        if saved:
+            checkpoint.restore_rates(self, *saved)
         self.update_pressure()
 
     def _hydrostatic_start(self, tops):
@@ -139,8 +144,7 @@ class Simulation:
 
     def reorder(self):
         """Sort particles by cell so that neighbours are near in memory (ids keep identity)."""
-        grid = CellGrid(self.state.pos, SUPPORT * self.h)
-        order = grid.order
+        order = self._grid(self.state.pos, count=False).order
         self.state.permute(order)
         self.acc[:] = self.acc[order]
         if self.drho is not None:
@@ -178,12 +182,15 @@ class Simulation:
                 self.counters["density_diffusion"] += 1
         self.pm.hook.sph_accelerations(sim=self, acc=self.acc)
 
-    def _grid(self, pos):
+    def _grid(self, pos, count=True):
         try:
             grid = CellGrid(pos, SUPPORT * self.h)
         except OverflowError as e:
-            raise Instability(self.step, self.t, -1, f"particles spread far apart ({e})") from None
-        self.counters["neighbour_search"] += 1
+            far = int(np.argmax(np.abs(pos - np.median(pos, axis=0)).sum(axis=1)))
+            pid = int(self.state.id[far]) if far < self.state.n else -1
+            raise Instability(self.step, self.t, pid, f"particles spread far apart ({e})") from None
+        if count:
+            self.counters["neighbour_search"] += 1
         return grid
 
     def _sources(self):
@@ -259,6 +266,9 @@ class Simulation:
             self.reorder()
         if self.shepard_every and self.step > 0 and self.step % self.shepard_every == 0:
             self.shepard_filter()
+        if not self.integrator.fresh:  # dt needs the current accelerations (force limit)
+            self.compute_rates()
+            self.integrator.fresh = True
         self.dt = self.choose_dt()
         self.integrator.step(self, self.dt)
         self.t += self.dt

@@ -1,0 +1,150 @@
+"""Cell-linked-list neighbour search: ``CellGrid`` + ``neighbour_pairs`` against brute force.
+
+Point sets come from hypothesis, with coordinates drawn both from the continuum and from
+exact multiples of the cell size (points on cell edges), duplicated points, a single
+particle and clusters inside one cell.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from sphcore.neighbours import CellGrid, neighbour_pairs
+
+CELL_SIZES = [0.1, 0.25, 0.3, 1.0, 0.013]
+MAX_CELLS = 7  # per axis: keeps the grid far below CellGrid's overflow guard
+
+
+def brute_force_pairs(pos: np.ndarray, radius: float) -> set[tuple[int, int]]:
+    """Every ordered pair i != j with |x_i - x_j|^2 < radius^2 (same arithmetic as the kernel)."""
+    n, dim = pos.shape
+    r2max = radius * radius
+    out = set()
+    for i in range(n):
+        for j in range(n):
+            if i == j:
+                continue
+            r2 = 0.0
+            for d in range(dim):
+                dd = float(pos[i, d]) - float(pos[j, d])
+                r2 += dd * dd
+            if r2 < r2max:
+                out.add((i, j))
+    return out
+
+
+def grid_pairs(pos: np.ndarray, cell_size: float, radius: float):
+    grid = CellGrid(pos, cell_size)
+    pi, pj = neighbour_pairs(pos, grid.order, grid.cell_start, grid.lo, grid.cell_size, grid.ncell, radius)
+    pairs = list(zip(pi.tolist(), pj.tolist()))
+    assert len(pairs) == len(set(pairs)), "a pair was reported twice"
+    return set(pairs), grid
+
+
+@st.composite
+def point_sets(draw, dim: int):
+    """(points (n, dim), cell size): edges, continuum, duplicates; optionally shifted."""
+    cs = draw(st.sampled_from(CELL_SIZES))
+    span = MAX_CELLS - 1
+    on_edge = st.integers(0, span).map(lambda k: k * cs)
+    anywhere = st.floats(0.0, span * cs, allow_nan=False, allow_infinity=False)
+    half_edge = st.integers(0, 2 * span).map(lambda k: 0.5 * k * cs)
+    coord = st.one_of(on_edge, anywhere, half_edge)
+    pts = draw(st.lists(st.tuples(*[coord] * dim), min_size=1, max_size=60))
+    dups = draw(st.lists(st.integers(0, len(pts) - 1), max_size=8))
+    pts = pts + [pts[i] for i in dups]
+    pos = np.array(pts, dtype=np.float64).reshape(-1, dim)
+    order = draw(st.permutations(range(pos.shape[0])))
+    pos = pos[list(order)]
+    shift = draw(st.sampled_from([0.0, -3.7, 1e3]))
+    return np.ascontiguousarray(pos + shift), cs
+
+
+@settings(max_examples=150, deadline=None)
+@given(data=point_sets(2))
+def test_pairs_equal_brute_force_2d(data):
+    pos, cs = data
+    pairs, _ = grid_pairs(pos, cs, cs)
+    assert pairs == brute_force_pairs(pos, cs)
+
+
+@settings(max_examples=150, deadline=None)
+@given(data=point_sets(3))
+def test_pairs_equal_brute_force_3d(data):
+    pos, cs = data
+    pairs, _ = grid_pairs(pos, cs, cs)
+    assert pairs == brute_force_pairs(pos, cs)
+
+
+@settings(max_examples=50, deadline=None)
+@given(data=st.one_of(point_sets(2), point_sets(3)), frac=st.floats(0.05, 1.0))
+def test_pairs_for_a_radius_below_the_cell_size(data, frac):
+    pos, cs = data
+    pairs, _ = grid_pairs(pos, cs, frac * cs)
+    assert pairs == brute_force_pairs(pos, frac * cs)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_single_particle_has_no_neighbour(dim):
+    pos = np.full((1, dim), 0.4)
+    pairs, grid = grid_pairs(pos, 0.1, 0.1)
+    assert pairs == set()
+    assert grid.order.tolist() == [0]
+    assert int(np.prod(grid.ncell)) == 1
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_duplicated_points_are_neighbours_of_each_other(dim):
+    pos = np.zeros((4, dim))  # distance 0 < radius: every ordered pair
+    pos[3] += 0.5  # and one far away
+    pairs, _ = grid_pairs(pos, 0.1, 0.1)
+    assert pairs == {(i, j) for i in range(3) for j in range(3) if i != j}
+
+
+@settings(max_examples=50, deadline=None)
+@given(dim=st.sampled_from([2, 3]), seed=st.integers(0, 2**32 - 1), n=st.integers(1, 80))
+def test_all_particles_in_one_cell(dim, seed, n):
+    cs = 0.1
+    pos = np.random.default_rng(seed).uniform(0.0, 0.99 * cs, size=(n, dim))
+    pairs, grid = grid_pairs(pos, cs, cs)
+    assert int(np.prod(grid.ncell)) == 1
+    assert np.all(grid.cell == 0)
+    assert pairs == brute_force_pairs(pos, cs)
+    # every pair within one cell of side cs is closer than sqrt(dim) cs; all closer than cs found
+    assert len(pairs) == len(brute_force_pairs(pos, cs))
+
+
+@settings(max_examples=100, deadline=None)
+@given(data=st.one_of(point_sets(2), point_sets(3)))
+def test_counting_sort_is_a_stable_permutation_grouped_by_cell(data):
+    pos, cs = data
+    n, dim = pos.shape
+    grid = CellGrid(pos, cs)
+    ncells = int(np.prod(grid.ncell))
+    # order is a permutation of the particles
+    assert sorted(grid.order.tolist()) == list(range(n))
+    # CSR offsets: monotone, from 0 to n, one more entry than cells
+    assert grid.cell_start.shape == (ncells + 1,)
+    assert grid.cell_start[0] == 0 and grid.cell_start[-1] == n
+    assert np.all(np.diff(grid.cell_start) >= 0)
+    # cells in order are non-decreasing, and each cell's slice holds exactly its particles,
+    # in their original order (the sort is stable)
+    assert np.all(np.diff(grid.cell[grid.order]) >= 0)
+    for c in range(ncells):
+        members = grid.order[grid.cell_start[c]:grid.cell_start[c + 1]]
+        assert members.tolist() == np.flatnonzero(grid.cell == c).tolist()
+    # each particle's cell contains it (up to the clamp of the last cell and round-off)
+    idx = np.stack(np.unravel_index(grid.cell, tuple(grid.ncell), order="F"), axis=1)[:, :dim]
+    lo_corner = grid.lo[:dim] + idx * cs
+    tol = 1e-9 * (1.0 + np.abs(pos))
+    assert np.all(pos >= lo_corner - tol)
+    assert np.all(pos <= lo_corner + cs + tol)
+
+
+def test_far_flung_particle_overflows_the_grid():
+    pos = np.array([[0.0, 0.0], [1e4, 1e4]])
+    with pytest.raises(OverflowError):
+        CellGrid(pos, 0.01)

@@ -1,0 +1,269 @@
+"""Third-party plugins, installed the real way: a module plus a ``*.dist-info`` folder with an
+``entry_points.txt`` in the group ``sphcore``, found on ``sys.path`` by importlib.metadata.
+
+The throwaway plugin declares a table ``[throwaway]`` (one key, ``accel``), reads it in
+``sph_configure``, adds that constant acceleration in ``sph_accelerations`` and counts
+``sph_after_step`` calls.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import by_id, make_sim, write_case
+
+from sphcore import cli, pluginhost, runner
+from sphcore.errors import CaseError
+from sphcore.pluginhost import PluginLoadError
+
+GOOD_PLUGIN = '''
+"""A throwaway sphcore plugin, written by the test suite."""
+import numpy as np
+
+from sphcore.hookspecs import hookimpl
+from sphcore.options import Option
+
+
+class Throwaway:
+    def __init__(self):
+        self.accel = None
+        self.after_step_calls = 0
+
+    @hookimpl
+    def sph_options(self):
+        return {"throwaway": {
+            "accel": Option([0.0, 0.0, 0.0], "vector", "m/s^2", "constant extra acceleration"),
+            "fail_at_step": Option(0, "int", doc="raise RuntimeError after this step (a plugin bug); 0 never", min=0),
+        }}
+
+    @hookimpl
+    def sph_configure(self, case):
+        self.accel = np.array(case.config["throwaway"]["accel"][: case.dim])
+        self.fail_at_step = case.config["throwaway"]["fail_at_step"]
+
+    @hookimpl
+    def sph_accelerations(self, sim, acc):
+        acc += self.accel
+
+    @hookimpl
+    def sph_after_step(self, sim):
+        self.after_step_calls += 1
+        sim.stats["throwaway_after_step"] = self.after_step_calls
+        if sim.step == self.fail_at_step:
+            raise RuntimeError("throwaway plugin failed on purpose")
+'''
+
+BAD_PLUGIN = '''
+"""A throwaway sphcore plugin with a misspelt hook."""
+from sphcore.hookspecs import hookimpl
+
+
+class Misspelt:
+    @hookimpl
+    def sph_after_stepp(self, sim):
+        pass
+'''
+
+FREE_CASE = """
+[case]
+dim = 2
+
+[domain]
+min = [-10.0, -10.0]
+max = [10.0, 10.0]
+
+[[blocks]]
+min = [0.0, 0.0]
+count = [3, 2]
+kind = "sphere"
+velocity = [0.25, -0.5]
+
+[particles]
+dx = 0.1
+
+[physics]
+sph = false
+gravity = [0.0, 0.0]
+
+[time]
+t_end = 0.5
+dt = 0.01
+
+[plugins]
+use = ["throwaway"]
+
+[throwaway]
+accel = [1.5, -2.0]
+"""
+
+
+def install(site: Path, module: str, source: str, dist: str, entry_points: str):
+    """Write ``module.py`` and ``<dist>-0.1.dist-info`` (METADATA, entry_points.txt) into ``site``."""
+    site.mkdir(parents=True, exist_ok=True)
+    (site / f"{module}.py").write_text(textwrap.dedent(source))
+    info = site / f"{dist.replace('-', '_')}-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {dist}\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(textwrap.dedent(entry_points))
+
+
+@pytest.fixture
+def site(tmp_path, monkeypatch):
+    """A fresh directory on sys.path; entry points are re-read before and after the test."""
+    path = tmp_path / "site"
+    path.mkdir()
+    monkeypatch.syspath_prepend(str(path))
+    pluginhost.refresh()
+    modules_before = set(sys.modules)
+    yield path
+    for name in set(sys.modules) - modules_before:
+        if name.startswith("throwaway"):
+            del sys.modules[name]
+    monkeypatch.undo()
+    pluginhost.refresh()
+
+
+@pytest.fixture
+def throwaway(site):
+    install(site, "throwaway_sph", GOOD_PLUGIN, "throwaway-sph", "[sphcore]\nthrowaway = throwaway_sph:Throwaway\n")
+    pluginhost.refresh()
+    return site
+
+
+@pytest.fixture
+def misspelt(site):
+    install(site, "throwaway_bad_sph", BAD_PLUGIN, "throwaway-bad-sph",
+            "[sphcore]\nthrowaway_bad = throwaway_bad_sph:Misspelt\n")
+    pluginhost.refresh()
+    return site
+
+
+def test_installed_plugin_is_described(throwaway, capsys):
+    rows = {row["name"]: row for row in pluginhost.describe()}
+    assert rows["throwaway"] == {
+        "name": "throwaway", "dist": "throwaway-sph", "version": "0.1",
+        "hooks": ["sph_accelerations", "sph_after_step", "sph_configure", "sph_options"],
+    }
+    assert cli.main(["plugins"]) == 0
+    line = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("throwaway ")]
+    assert len(line) == 1
+    assert "throwaway-sph 0.1" in line[0] and "sph_accelerations" in line[0]
+
+
+def test_plugin_is_gone_after_the_fixture(tmp_path):
+    """The fixtures leave no trace: a later test sees only the plugins really installed."""
+    assert "throwaway" not in pluginhost.available()
+    assert "throwaway" not in pluginhost.option_schemas()
+
+
+def test_plugin_acceleration_moves_free_particles(throwaway, tmp_path):
+    case_dir = write_case(tmp_path / "free", FREE_CASE)
+    summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
+    assert summary["status"] == "completed", summary["message"]
+    sim = summary["_sim"]
+    assert sim.t == 0.5 and summary["steps"] == 50
+    # no SPH: no neighbour search, no density, only the plugin's acceleration
+    assert sim.counters["neighbour_search"] == 0 and sim.drho is None
+    start = by_id(make_sim(case_dir).state)
+    end = by_id(sim.state)
+    a, v0, t = np.array([1.5, -2.0]), np.array([0.25, -0.5]), sim.t
+    np.testing.assert_allclose(end["pos"], start["pos"] + v0 * t + 0.5 * a * t * t, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(end["vel"], np.broadcast_to(v0 + a * t, end["vel"].shape), rtol=1e-12, atol=1e-12)
+    # sph_after_step fired once per step
+    assert sim.stats["throwaway_after_step"] == summary["steps"] == 50
+
+
+def test_unselected_plugin_does_nothing(throwaway, tmp_path):
+    """Installed but not in plugins.use: its table is still validated, its hooks never run."""
+    case_dir = write_case(tmp_path / "free", FREE_CASE.replace('use = ["throwaway"]', "use = []"))
+    sim = make_sim(case_dir)
+    while not sim.done():
+        sim.advance()
+    assert np.all(sim.state.vel == np.array([0.25, -0.5]))  # no acceleration at all
+    assert "throwaway_after_step" not in sim.stats
+
+
+def test_unknown_key_in_plugin_table(throwaway, tmp_path, capsys):
+    case_dir = write_case(tmp_path / "free", FREE_CASE.replace("accel = [1.5, -2.0]", "acel = [1.5, -2.0]"))
+    with pytest.raises(CaseError) as info:
+        runner.load(case_dir)
+    assert Path(info.value.file) == case_dir / "case.toml"
+    assert info.value.key == "throwaway.acel"
+    status = cli.main(["run", str(case_dir)])
+    err = capsys.readouterr().err.strip()
+    assert status == 2
+    assert len(err.splitlines()) == 1 and str(case_dir / "case.toml") in err and "throwaway.acel" in err
+    assert not (case_dir / "output").exists()
+
+
+def test_wrong_type_in_plugin_table(throwaway, tmp_path):
+    case_dir = write_case(tmp_path / "free", FREE_CASE.replace("accel = [1.5, -2.0]", 'accel = "up"'))
+    with pytest.raises(CaseError) as info:
+        runner.load(case_dir)
+    assert info.value.key == "throwaway.accel"
+
+
+def test_plugin_table_without_the_plugin_installed(tmp_path):
+    case_dir = write_case(tmp_path / "free", FREE_CASE.replace('use = ["throwaway"]', "use = []"))
+    with pytest.raises(CaseError) as info:
+        runner.load(case_dir)
+    assert info.value.key == "throwaway"  # an unknown section, named
+
+
+def test_plugin_listed_twice(throwaway, tmp_path):
+    text = FREE_CASE.replace('use = ["throwaway"]', 'use = ["throwaway", "throwaway"]')
+    case_dir = write_case(tmp_path / "free", text)
+    with pytest.raises(CaseError) as info:
+        runner.load(case_dir)
+    assert info.value.key == "plugins.use" and "twice" in str(info.value)
+
+
+def test_each_run_gets_fresh_plugin_instances(throwaway, tmp_path):
+    case_dir = write_case(tmp_path / "free", FREE_CASE)
+    first = runner.run(case_dir, output=tmp_path / "a", quiet=True)
+    second = runner.run(case_dir, output=tmp_path / "b", quiet=True)
+    assert first["_sim"].stats["throwaway_after_step"] == second["_sim"].stats["throwaway_after_step"] == 50
+
+
+def test_misspelt_hook_fails_at_start_up(misspelt, tmp_path, capsys):
+    case_dir = write_case(tmp_path / "bad", FREE_CASE.replace('use = ["throwaway"]', 'use = ["throwaway_bad"]')
+                          .replace("[throwaway]\naccel = [1.5, -2.0]\n", ""))
+    with pytest.raises(PluginLoadError) as info:
+        runner.run(case_dir, output=tmp_path / "out", quiet=True)
+    assert "sph_after_stepp" in str(info.value)
+    assert "plugin 'throwaway_bad'" in str(info.value)  # names the plugin by its entry-point name
+    assert not (tmp_path / "out").exists()
+    status = cli.main(["run", str(case_dir)])
+    err = capsys.readouterr().err.strip()
+    assert status == 2
+    assert len(err.splitlines()) == 1 and "sph_after_stepp" in err
+    assert not (case_dir / "output").exists()
+
+
+
+def test_misspelt_plugin_spoils_no_other_run(misspelt, tmp_path):
+    case_dir = write_case(tmp_path / "free", FREE_CASE.replace('use = ["throwaway"]', "use = []")
+                          .replace("[throwaway]\naccel = [1.5, -2.0]\n", ""))
+    summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
+    assert summary["status"] == "completed"
+
+
+def test_misspelt_plugin_is_listed_as_broken(misspelt):
+    rows = {row["name"]: row for row in pluginhost.describe()}
+    assert rows["throwaway_bad"]["hooks"][0].startswith("BROKEN")
+    assert "sph_after_stepp" in rows["throwaway_bad"]["hooks"][0]
+
+
+def test_summary_of_a_crashed_run_does_not_say_completed(throwaway, tmp_path):
+    text = FREE_CASE.replace("accel = [1.5, -2.0]", "accel = [1.5, -2.0]\nfail_at_step = 3")
+    case_dir = write_case(tmp_path / "free", text)
+    with pytest.raises(RuntimeError, match="on purpose"):
+        runner.run(case_dir, output=tmp_path / "out", quiet=True)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["t"] == pytest.approx(0.03)
+    assert summary["status"] != "completed"
