@@ -1,0 +1,80 @@
+"""Pressure against depth in a tank at rest, compared with the hydrostatic rho g (H - y).
+
+    python postprocessing/pressure_profile.py RUN_OUTPUT [--H 1.0] [--rho0 1000] [--time T]
+
+Takes the last frame (or the one nearest --time), averages the pressure over each
+horizontal particle layer (layers one spacing dx = 2 r apart, counted from the floor), and
+writes RUN/pressure_profile.csv (y, p_mean, p_min, p_max, p_hydrostatic, relative error)
+and RUN/pressure_profile.png. Prints the largest layer error below the top two layers, the
+criterion of the validation.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+try:
+    from frames import frames
+except ImportError:
+    from .frames import frames
+
+G = 9.81
+
+
+def layer_profile(pos, p, radius, H, rho0, floor=0.0, up=1):
+    dx = 2.0 * float(np.median(radius))
+    y = pos[:, up] - floor
+    layer = np.floor(y / dx).astype(int)
+    rows = []
+    for k in np.unique(layer):
+        sel = layer == k
+        ym = float(y[sel].mean())
+        ph = rho0 * G * (H - ym)
+        pm = float(p[sel].mean())
+        rows.append((ym, pm, float(p[sel].min()), float(p[sel].max()), ph, (pm - ph) / ph if ph > 0 else np.nan))
+    return np.array(rows), dx
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("run")
+    ap.add_argument("--H", type=float, default=1.0, help="still-water depth (m)")
+    ap.add_argument("--rho0", type=float, default=1000.0)
+    ap.add_argument("--time", type=float, help="frame time (s); default: the last frame")
+    args = ap.parse_args(argv)
+    chosen = None
+    for t, pos, f in frames(args.run):
+        if chosen is None or args.time is None or abs(t - args.time) < abs(chosen[0] - args.time):
+            chosen = (t, pos, f)
+    t, pos, f = chosen
+    prof, dx = layer_profile(pos, f["pressure"], f["radius"], args.H, args.rho0)
+    outdir = Path(args.run) if Path(args.run).is_dir() else Path(args.run).parent
+    np.savetxt(outdir / "pressure_profile.csv", prof, delimiter=",", comments="", fmt="%.6g",
+               header="y_m,p_mean_pa,p_min_pa,p_max_pa,p_hydrostatic_pa,rel_err")
+    below = prof[:, 0] < args.H - 2 * dx
+    worst = float(np.nanmax(np.abs(prof[below, 5])))
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(4.5, 5))
+    ax.fill_betweenx(prof[:, 0], prof[:, 2], prof[:, 3], alpha=0.25, label="min-max in layer")
+    ax.plot(prof[:, 1], prof[:, 0], "o-", ms=3, label="layer mean")
+    ax.plot(prof[:, 4], prof[:, 0], "k--", label=r"$\rho g (H - y)$")
+    ax.set_xlabel("p [Pa]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"t = {t:.3g} s, worst layer error {100 * worst:.2f}%", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(outdir / "pressure_profile.png", dpi=120)
+    plt.close(fig)
+    print(f"t = {t:.6g} s: largest layer-mean error below the top two layers: {100 * worst:.3f}%")
+    return {"t": t, "max_layer_rel_err": worst}
+
+
+if __name__ == "__main__":
+    main()
