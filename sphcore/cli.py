@@ -45,7 +45,7 @@ def main(argv=None) -> int:
     try:
         if args.command == "plugins":
             for row in pluginhost.describe():
-                print(f"{row['name']:<12} {row['dist']} {row['version']}  hooks: {', '.join(row['hooks'])}")
+                print(f"{row['name']:<16} {row['dist']} {row['version']}  hooks: {', '.join(row['hooks'])}")
             return 0
         if args.command == "check":
             case, pm = runner.load(args.case_dir, args.overrides)
