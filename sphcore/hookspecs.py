@@ -108,7 +108,8 @@ def sph_after_integrate(sim, pos0, pos, vel, acc, dt):
     end of the step, ``acc`` the acceleration used for the step, ``dt`` the step (s).
     May change ``pos`` and ``vel`` in place (this is where the reflective boundary acts);
     must not change ``pos0`` or ``acc``. The integrator keeps its later stages consistent
-    with the corrected values.
+    with the corrected values. Invariant: ``pos0`` is admissible (inside every wall), because
+    nothing moves particles between the end of one step and the start of the next.
     """
 
 

@@ -1,0 +1,246 @@
+"""Collision detection and response against wall planes (paper sections 2 and 3).
+
+A particle is a rigid sphere of radius r (m) whose centre moved, with no walls present,
+from C0 (``pos0``, start of the step) to C1 (``pos``, end of the step). Each wall is a
+plane n . (X - X0) = 0 (Eq. 3) with the unit normal n pointing into the domain, and the
+signed distance of a centre C to it is d = n . (C - X0) = n . C - offset (Eq. 4, m),
+``offset = n . X0``. The particle is inside when d >= r for every plane.
+
+Per particle and step (section 2.2), with the segment A = C0, B = C1:
+
+1. Detection: a plane collides when d_B < r - tol (Fig. 2 B and C).
+2. First contact (Eqs. 5-7): along A -> B the sphere touches a plane at the fraction
+   f = (d_A - r) / (d_A - d_B) (Eq. 7 divided by |C1 - C0|); f = 0 when d_A <= r. The
+   colliding plane with the smallest f is the collision plane (Fig. 5).
+3. Response: B += (1 + CR)(r - d_B) n (Eqs. 1 and 8); the normal velocity component
+   u = v . n, if negative (moving out of the domain), becomes +CR |u_c| (Eq. 2, see
+   below); the tangential velocity is never changed.
+4. The new segment runs from the contact point A' = A + f (B_old - A) (C0', Fig. 6) to
+   the reflected B; repeat until no plane collides (Fig. 7), at most ``max_reflections``
+   times. A particle still outside then is put back at C0 (admissible at the start of
+   the step) with its reflected velocity: the *guard*. No particle ever ends outside.
+
+Restitution. The paper calls CR a restitution coefficient of kinetic energy, but Eq. 2
+scales the normal *velocity* by CR, so the normal kinetic energy is multiplied by CR**2
+(CR = 1: elastic, CR = 0: the normal motion stops at the wall); the tangential kinetic
+energy is kept. The position response (Eq. 1) puts the centre CR (r - d_B) back inside,
+the distance a particle rebounding with CR times its speed covers in the rest of the step.
+
+Velocity at contact (the default). The integrator hands over the end-of-step velocity
+and the step's acceleration a. Under constant a the normal speed at the contact is
+u_c**2 = u**2 + 2 a_n (r - d_B), a_n = a . n (free motion from contact to B), and after
+rebounding with CR |u_c| the particle sits CR (r - d_B) inside, hence
+u_f**2 = CR**2 u_c**2 + 2 a_n CR (r - d_B), u_f = +sqrt(max(0, u_f**2)). With a_n = 0 this
+is Eq. 2 exactly (u_f = -CR u). With it, a ball under gravity keeps its mechanical
+energy v**2/2 - a . x to round-off across bounces when CR = 1, and leaves each bounce with
+exactly CR**2 times the normal energy it hit the wall with. Eq. 2 applied literally at
+the end point (``velocity_at_contact=False``: u_f = -CR u) changes the energy of a ball
+in a gravity field by O(|a| |v| dt) per bounce, because the position is mirrored but the
+velocity is not corrected for the work of gravity between contact and mirror point.
+The max(0, .) only matters for a bounce lower than one step's travel (the mirror point
+is then above the bounce's apex); the particle is left there at rest along n.
+
+Tolerance. tol = 1e-9 r (a femtometre for a micrometre particle): particles resting
+exactly at d = r, as in the paper's static cases (section 4.1), stay untouched bit for
+bit even when d evaluates to r minus an ulp on slanted planes. It must stay well above
+the round-off of n . C (about 1e-16 |C|), i.e. r >> 1e-7 |C|, true for any SPH case.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+#: relative contact allowance: a plane collides only when d < r - TOL_REL * r
+TOL_REL = 1e-9
+
+
+@numba.njit(cache=True)
+def _distance(normals, offsets, k, x, i, dim):
+    """Signed distance d = n_k . x_i - offset_k (Eq. 4, m). One definition for all checks."""
+    d = 0.0
+    for j in range(dim):
+        d += normals[k, j] * x[i, j]
+    return d - offsets[k]
+
+
+@numba.njit(cache=True)
+def _limit(r):
+    """The collision threshold r - tol (m): a plane collides when d < _limit(r)."""
+    return r - TOL_REL * r
+
+
+@numba.njit(parallel=True, cache=True)
+def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
+            velocity_at_contact, guarded_flags, reflection_counts):
+    """Reflect every particle that left the domain during a step; return the guard count.
+
+    pos0, pos, vel, acc: (n, dim) C-contiguous float64: start and end positions (m),
+    end-of-step velocity (m/s), the step's acceleration (m/s^2). radius (n,) m.
+    normals (k, dim) unit vectors into the domain, offsets (k,) = n . X0 (m).
+    cr: restitution coefficient (Eq. 2), 0 <= cr <= 1. max_reflections: int >= 0.
+    velocity_at_contact: bool, Eq. 2 at the contact point (True) or at the end point.
+    guarded_flags (n,) int8 out: 1 where the guard put the particle back at pos0.
+    reflection_counts (n,) int32 out: reflections performed (0: untouched).
+    ``pos`` and ``vel`` are changed in place; ``pos0`` and ``acc`` are only read.
+    """
+    n, dim = pos.shape
+    nplanes = normals.shape[0]
+    # start of the current sub-segment (C0' after a reflection); one allocation per call
+    start = np.empty_like(pos)
+    guarded = 0
+    for i in numba.prange(n):
+        r = radius[i]
+        lim = _limit(r)
+        count = 0
+        guarded_flags[i] = 0
+        while True:
+            best = -1
+            fbest = np.inf
+            dbest = 0.0
+            for k in range(nplanes):
+                db = _distance(normals, offsets, k, pos, i, dim)
+                if db < lim:
+                    # the segment starts at C0 until the first reflection, then at C0'
+                    if count == 0:
+                        da = _distance(normals, offsets, k, pos0, i, dim)
+                    else:
+                        da = _distance(normals, offsets, k, start, i, dim)
+                    # d_A <= r: touching at the start (rest, C1 = C0, parallel motion): f = 0
+                    # otherwise d_A > r > d_B, so the denominator is positive
+                    f = 0.0 if da <= r else (da - r) / (da - db)
+                    if f < fbest:
+                        fbest = f
+                        best = k
+                        dbest = db
+            if best < 0:
+                break
+            if count == max_reflections:
+                # guard: C0 is inside (the invariant); keep the velocity reflected so far
+                for j in range(dim):
+                    pos[i, j] = pos0[i, j]
+                guarded_flags[i] = 1
+                guarded += 1
+                break
+            if count == 0:
+                for j in range(dim):
+                    start[i, j] = pos0[i, j]
+            # contact point C0' (Fig. 6): inside every plane, so the invariant holds for A
+            for j in range(dim):
+                start[i, j] += fbest * (pos[i, j] - start[i, j])
+            depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
+            u = 0.0
+            an = 0.0
+            for j in range(dim):
+                u += vel[i, j] * normals[best, j]
+                an += acc[i, j] * normals[best, j]
+            if u < 0.0:  # never reverse a particle already moving back in
+                if velocity_at_contact:
+                    uc2 = max(u * u + 2.0 * an * depth, 0.0)
+                    uf = np.sqrt(max(cr * cr * uc2 + 2.0 * an * cr * depth, 0.0))
+                else:
+                    uf = -cr * u
+                for j in range(dim):
+                    vel[i, j] += (uf - u) * normals[best, j]
+            shift = (1.0 + cr) * depth  # |t| of Eq. 1
+            for j in range(dim):
+                pos[i, j] += shift * normals[best, j]
+            count += 1
+        reflection_counts[i] = count
+    return guarded
+
+
+@numba.njit(parallel=True, cache=True)
+def min_clearance(pos, radius, normals, offsets):
+    """(n,) min over planes of d - r (m), with the kernel's own arithmetic for d."""
+    n, dim = pos.shape
+    out = np.empty(n)
+    for i in numba.prange(n):
+        c = np.inf
+        for k in range(normals.shape[0]):
+            c = min(c, _distance(normals, offsets, k, pos, i, dim) - radius[i])
+        out[i] = c
+    return out
+
+
+@numba.njit(parallel=True, cache=True)
+def outside_mask(pos, radius, normals, offsets):
+    """(n,) bool: True where some plane has d < r - tol, exactly the kernel's collision test."""
+    n, dim = pos.shape
+    out = np.zeros(n, np.bool_)
+    for i in numba.prange(n):
+        lim = _limit(radius[i])
+        for k in range(normals.shape[0]):
+            if _distance(normals, offsets, k, pos, i, dim) < lim:
+                out[i] = True
+    return out
+
+
+def _plane_arrays(planes):
+    """(normals, offsets) as C-contiguous float64 from a Planes or a (normals, offsets) pair."""
+    if hasattr(planes, "normals"):
+        normals, offsets = planes.normals, planes.offsets
+    else:
+        normals, offsets = planes
+    return (np.ascontiguousarray(normals, dtype=np.float64),
+            np.ascontiguousarray(offsets, dtype=np.float64).reshape(-1))
+
+
+def _inout(name, a, shape):
+    """Arrays changed in place must not be silently copied by a conversion."""
+    if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous
+            and a.flags.writeable and a.shape == shape):
+        raise ValueError(f"{name} must be a writeable C-contiguous float64 array of shape {shape}")
+    return a
+
+
+def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflections=1000,
+                      velocity_at_contact=True, guarded_flags=None, reflection_counts=None):
+    """Python entry to :func:`reflect`: checks and converts arguments, returns the guard count.
+
+    pos (m) and vel (m/s), (n, dim) writeable C-contiguous float64, are changed in place.
+    pos0 (m) and acc (m/s^2, None for zero) are converted as needed; radius is a scalar
+    or (n,) (m); planes a :class:`sphcore.geometry.Planes` or ``(normals, offsets)``.
+    guarded_flags ((n,) int8) and reflection_counts ((n,) int32), when given, receive the
+    per-particle guard flags and reflection counts.
+    """
+    n, dim = np.shape(pos)
+    pos = _inout("pos", pos, (n, dim))
+    vel = _inout("vel", vel, (n, dim))
+    pos0 = np.ascontiguousarray(pos0, dtype=np.float64)
+    acc = np.zeros((n, dim)) if acc is None else np.ascontiguousarray(acc, dtype=np.float64)
+    if pos0.shape != (n, dim) or acc.shape != (n, dim):
+        raise ValueError(f"pos0 and acc must have shape {(n, dim)}")
+    radius = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, np.float64), (n,)))
+    normals, offsets = _plane_arrays(planes)
+    if normals.shape[1:] != (dim,) or offsets.shape != (normals.shape[0],):
+        raise ValueError(f"planes must have normals (k, {dim}) and offsets (k,)")
+    if not 0.0 <= cr <= 1.0:
+        raise ValueError(f"cr must lie in [0, 1], got {cr!r}")
+    if guarded_flags is None:
+        guarded_flags = np.empty(n, np.int8)
+    if reflection_counts is None:
+        reflection_counts = np.empty(n, np.int32)
+    if guarded_flags.dtype != np.int8 or guarded_flags.shape != (n,):
+        raise ValueError(f"guarded_flags must be int8 of shape {(n,)}")
+    if reflection_counts.dtype != np.int32 or reflection_counts.shape != (n,):
+        raise ValueError(f"reflection_counts must be int32 of shape {(n,)}")
+    return int(reflect(pos0, pos, vel, acc, radius, normals, offsets, float(cr),
+                       int(max_reflections), bool(velocity_at_contact), guarded_flags,
+                       reflection_counts))
+
+
+def clearance(pos, radius, planes):
+    """(n,) min over planes of d - r (m) for particles ``pos`` of ``radius`` (scalar or (n,))."""
+    pos = np.ascontiguousarray(pos, dtype=np.float64)
+    radius = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, np.float64), (pos.shape[0],)))
+    normals, offsets = _plane_arrays(planes)
+    return min_clearance(pos, radius, normals, offsets)
+
+
+def outside(pos, radius, planes):
+    """(n,) bool: particles ``pos`` of ``radius`` (scalar or (n,)) beyond a wall (d < r - tol)."""
+    pos = np.ascontiguousarray(pos, dtype=np.float64)
+    radius = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, np.float64), (pos.shape[0],)))
+    normals, offsets = _plane_arrays(planes)
+    return outside_mask(pos, radius, normals, offsets)
