@@ -1,5 +1,6 @@
 """Particle-steps per second of a full SPH step (neighbours, rates, integration) on a 2D
-block of water at rest in a box, at several sizes, with peak memory.
+block of water at rest in a box, at several sizes, with peak memory and the share of the
+step spent in the boundary hook (sph_after_integrate: the reflective kernel).
 
     python benchmarks/bench_step.py [--sizes 10000 100000 1000000] [--steps 20] [--plugins reflective]
 
@@ -51,12 +52,24 @@ def make_case(n: int, plugins) -> Path:
 def measure(n: int, steps: int, plugins) -> dict:
     case, pm = runner.load(make_case(n, plugins))
     sim = Simulation(case, pm)
+    # time the after-integrate hook (where boundary plugins correct positions) separately
+    boundary = [0.0]
+    inner = sim.after_integrate
+
+    def timed(dt):
+        t = time.perf_counter()
+        inner(dt)
+        boundary[0] += time.perf_counter() - t
+
+    sim.after_integrate = timed
     sim.advance()  # compile and warm caches
+    boundary[0] = 0.0
     t0 = time.perf_counter()
     for _ in range(steps):
         sim.advance()
     wall = time.perf_counter() - t0
     return {"n": sim.state.n, "steps": steps, "wall_s": wall, "psps": steps * sim.state.n / wall,
+            "boundary_share": boundary[0] / wall,
             "us_per_particle_step": 1e6 * wall / (steps * sim.state.n),
             "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
 
@@ -70,11 +83,12 @@ def main():
     import numba
 
     print(f"full SPH step, 2D water block at rest, plugins={a.plugins or 'none'}, numba threads={numba.get_num_threads()}")
-    print(f"{'particles':>10} {'steps':>6} {'wall s':>8} {'particle-steps/s':>17} {'us/particle-step':>17} {'peak MB':>8}")
+    print(f"{'particles':>10} {'steps':>6} {'wall s':>8} {'particle-steps/s':>17} {'us/particle-step':>17} "
+          f"{'boundary %':>10} {'peak MB':>8}")
     for n in a.sizes:
         r = measure(n, a.steps, a.plugins)
         print(f"{r['n']:>10} {r['steps']:>6} {r['wall_s']:>8.3f} {r['psps']:>17.3e} "
-              f"{r['us_per_particle_step']:>17.4f} {r['peak_mb']:>8.0f}")
+              f"{r['us_per_particle_step']:>17.4f} {100 * r['boundary_share']:>10.2f} {r['peak_mb']:>8.0f}")
 
 
 if __name__ == "__main__":

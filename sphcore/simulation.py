@@ -224,10 +224,12 @@ class Simulation:
         self.counters["eos"] += 1
 
     def shepard_filter(self):
-        """Density <- Shepard-filtered density (Chen et al. 1999, CSPH zeroth order)."""
+        """Density <- Shepard-filtered density (Chen et al. 1999, CSPH zeroth order), over
+        the fluid and any plugin sources (ghosts complete the sums at walls)."""
         st = self.state
-        grid = self._grid(st.pos)
-        neighbour_sums(st.n, st.pos, st.rho, st.m, grid.order, grid.cell_start, grid.lo, grid.cell_size,
+        pos, vel, rho, p, m = self._sources()
+        grid = self._grid(pos)
+        neighbour_sums(st.n, pos, rho, m, grid.order, grid.cell_start, grid.lo, grid.cell_size,
                        grid.ncell, self.kernel_id, self.h, False, self.L, True, self.shepard)
         st.rho[:] = self.shepard
         self.update_pressure()
