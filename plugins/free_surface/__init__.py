@@ -1,0 +1,61 @@
+"""The ``free_surface`` plugin: particles at the free surface are held at zero pressure.
+
+The seed paper (section 4.2) marks the free-surface particles of its dam break and applies
+the constant (zero) pressure condition to them at every iteration. Detection: the
+divergence of position (see :mod:`.detect`) below ``threshold`` (default 1.5 in 2D,
+2.4 in 3D; Lee et al. 2008), with wall images so that particles along a wall are not
+taken for a surface. Fires in ``sph_before_forces``: the momentum equation of that force
+evaluation sees p = 0 there, and so does the output.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sphcore.hookspecs import hookimpl
+from sphcore.kernels import SUPPORT
+from sphcore.neighbours import CellGrid
+from sphcore.options import Option
+
+from .detect import position_divergence
+
+
+class FreeSurfacePlugin:
+    @hookimpl
+    def sph_options(self):
+        return {"free_surface": {
+            "threshold": Option(None, "float", doc="div r below which a particle is at the free surface; "
+                                "1.5 in 2D, 2.4 in 3D when unset", positive=True, nullable=True),
+            "mirror_walls": Option(True, "bool", doc="count wall images in div r, so walls are not surfaces"),
+        }}
+
+    @hookimpl
+    def sph_configure(self, case):
+        from sphcore.errors import CaseError
+
+        cfg = case.config["free_surface"]
+        if not case.config["physics"]["sph"]:
+            raise CaseError(case.file, "plugins.use", "free_surface needs physics.sph = true")
+        self.threshold = cfg["threshold"] or (1.5 if case.dim == 2 else 2.4)
+        self.mirror = cfg["mirror_walls"]
+        self.normals = np.ascontiguousarray(case.planes.normals)
+        self.offsets = np.ascontiguousarray(case.planes.offsets)
+        self.div = np.zeros(0)
+        self.count = 0
+
+    @hookimpl
+    def sph_before_forces(self, sim):
+        st = sim.state
+        if self.div.shape[0] != st.n:
+            self.div = np.zeros(st.n)
+        grid = CellGrid(st.pos, SUPPORT * sim.h)
+        position_divergence(st.n, st.pos, st.rho, st.m, grid.order, grid.cell_start, grid.lo, grid.cell_size,
+                            grid.ncell, sim.kernel_id, sim.h, self.normals, self.offsets, self.mirror, self.div)
+        surface = self.div < self.threshold
+        sim.force_pressure[surface] = 0.0
+        self.count = int(surface.sum())
+        sim.stats["free_surface_particles"] = self.count
+
+    @hookimpl
+    def sph_summary(self, sim):
+        return {"free_surface_particles_last": self.count}

@@ -1,0 +1,68 @@
+"""Free-surface detection by the divergence of position (Lee et al. 2008):
+
+    div r_i = - sum_j V_j (x_i - x_j) . grad_i W_ij,    V_j = m_j / rho_j,
+
+which equals the dimension (2 or 3) inside the fluid and drops towards half of it at a free
+surface, where the kernel support is half empty. A wall truncates the support too; to
+tell a wall from a free surface, the sum also runs over the mirror images of the
+neighbours across every wall plane the particle is near (the image of a neighbour is never
+closer than the neighbour itself, so the same cell scan finds them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from sphcore.kernels import kernel_f
+from sphcore.neighbours import cell_coords
+
+
+@njit(cache=True, parallel=True)
+def position_divergence(n, pos, rho, m, order, cell_start, lo, cell_size, ncell, kernel_id, h,
+                        normals, offsets, mirror, out):
+    """div r (dimensionless) for the first n particles; wall images included when ``mirror``."""
+    dim = pos.shape[1]
+    r2max = (2.0 * h) ** 2
+    zr = 1 if dim == 3 else 0
+    nplanes = normals.shape[0]
+    for i in prange(n):
+        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
+        s = 0.0
+        for dz in range(-zr, zr + 1):
+            z = cz + dz
+            if z < 0 or z >= ncell[2]:
+                continue
+            for dy in range(-1, 2):
+                y = cy + dy
+                if y < 0 or y >= ncell[1]:
+                    continue
+                for dx in range(-1, 2):
+                    x = cx + dx
+                    if x < 0 or x >= ncell[0]:
+                        continue
+                    c = x + ncell[0] * (y + ncell[1] * z)
+                    for k in range(cell_start[c], cell_start[c + 1]):
+                        j = order[k]
+                        vj = m[j] / rho[j]
+                        r2 = 0.0
+                        for d in range(dim):
+                            e = pos[i, d] - pos[j, d]
+                            r2 += e * e
+                        if j != i and r2 < r2max:
+                            s -= vj * kernel_f(kernel_id, np.sqrt(r2), h, dim) * r2
+                        if not mirror:
+                            continue
+                        for p in range(nplanes):
+                            dj = -offsets[p]
+                            for d in range(dim):
+                                dj += normals[p, d] * pos[j, d]
+                            if dj >= 2.0 * h:
+                                continue
+                            r2 = 0.0
+                            for d in range(dim):
+                                e = pos[i, d] - (pos[j, d] - 2.0 * dj * normals[p, d])
+                                r2 += e * e
+                            if r2 < r2max and r2 > 0.0:
+                                s -= vj * kernel_f(kernel_id, np.sqrt(r2), h, dim) * r2
+        out[i] = s
