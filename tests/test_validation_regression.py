@@ -1,0 +1,109 @@
+"""Short versions of the paper's validation cases, asserting physics.
+
+The full validations (0.3 s dam break, 5 s tank, every boundary) run by hand:
+``python postprocessing/validate.py``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sphcore import runner
+from sphcore.simulation import Simulation
+from sphcore_plugins.gauges.front import front_position
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+
+
+def sim_of(case, sets, t_end):
+    case_, pm = runner.load(CASES / case, [s.replace("'", '"') for s in sets], t_end=t_end)
+    return Simulation(case_, pm)
+
+
+def run(sim):
+    while not sim.done():
+        sim.advance()
+    return sim
+
+
+def total_energy(sim) -> float:
+    """Kinetic + potential + Tait internal energy (J per metre of depth in 2D).
+
+    The internal energy per unit mass of the Tait fluid, u(rho) = int p / rho^2 d rho, is
+    B (rho^(gamma-1) / (rho0^gamma (gamma - 1)) + 1 / rho) up to a constant, taken here
+    relative to u(rho0) so that the total is not dominated by a constant.
+    """
+    st = sim.state
+    b = sim.c0 ** 2 * sim.rho0 / sim.gamma
+
+    def tait_u(rho):
+        return b * (rho ** (sim.gamma - 1) / (sim.rho0 ** sim.gamma * (sim.gamma - 1)) + 1.0 / rho)
+
+    u = tait_u(st.rho) - tait_u(sim.rho0)
+    g = sim.gravity[: st.dim]
+    return float(np.sum(st.m * (0.5 * np.einsum("ij,ij->i", st.vel, st.vel) - st.pos @ g + u)))
+
+
+@pytest.mark.parametrize("boundary", [["reflective"], ["ghost", "reflective"]])
+def test_dam_break_first_50_ms(boundary):
+    """No particle lost or outside, mass conserved, energy never created (artificial viscosity
+    only dissipates, CR = 1 reflections keep it), the front advances but no faster than the
+    shallow-water (Ritter) bound a + 2 sqrt(g H) t."""
+    sim = sim_of("dam_break", [f"plugins.use={boundary}"], 0.05)
+    n0, m0, e0 = sim.state.n, sim.state.m.sum(), total_energy(sim)
+    a, height = 0.114, 71 * sim.case.dx
+    energies = []
+    while not sim.done():
+        sim.advance()
+        if sim.step % 50 == 0:
+            energies.append(total_energy(sim))
+    kinetic = 0.5 * float(np.sum(sim.state.m * np.einsum("ij,ij->i", sim.state.vel, sim.state.vel)))
+    st = sim.state
+    assert st.n == n0 and st.m.sum() == m0
+    assert sim.stats["escaped"] == 0
+    assert (sim.case.planes.distances(st.pos) >= st.radius[:, None] * (1 - 1e-9)).all()
+    # energy: dissipated, never gained; the tolerance (0.1% of the kinetic energy reached)
+    # covers the leapfrog's O(dt^2) energy error
+    assert kinetic > 0.01 * abs(e0)  # the column is really collapsing
+    assert max(energies) <= e0 + 1e-3 * kinetic
+    assert total_energy(sim) < e0
+    x = front_position(st.pos, st.radius)
+    ritter = a + 2 * math.sqrt(9.81 * height) * sim.t
+    assert a + 0.01 < x < ritter
+
+
+def test_hydrostatic_tank_modified_pressure_is_exact():
+    """The paper's formulation: water at rest stays exactly at rest, the pressure is exactly
+    hydrostatic, and the reflective walls (CR = 0) change nothing (section 4.1)."""
+    sim = sim_of("hydrostatic_tank", ['plugins.use=["reflective"]'], 0.2)
+    pos0, vel0 = sim.state.pos.copy(), sim.state.vel.copy()
+    order0 = np.argsort(sim.state.id)
+    run(sim)
+    st = sim.state
+    order = np.argsort(st.id)
+    assert np.array_equal(st.pos[order], pos0[order0])
+    assert np.array_equal(st.vel[order], vel0[order0])
+    y = st.pos[:, 1]
+    np.testing.assert_allclose(st.p, 1000 * 9.81 * (1.0 - y), rtol=1e-12, atol=1e-9)
+
+
+def test_hydrostatic_tank_plain_tait_with_ghosts():
+    """Plain Tait pressure with mirror ghosts: after 0.2 s the layer-averaged pressure below
+    the top two layers is within 5% of rho g (H - y) (the 2% figure needs settling and
+    h = 1.5 dx: see benchmarks/bench_boundaries.py --accuracy) and the surface moves less
+    than 0.1 dx."""
+    from sphcore_plugins.gauges.hydrostatic import layer_errors
+
+    sim = sim_of("hydrostatic_tank", ['plugins.use=["ghost", "reflective"]', "physics.modified_pressure=false"], 0.2)
+    top0 = sim.state.pos[:, 1].max()
+    run(sim)
+    st, dx = sim.state, sim.case.dx
+    rows = layer_errors(st.pos[:, 1], st.p, dx, 1.0, 1000.0, 9.81)
+    below = rows[:, 0] < 1.0 - 2 * dx
+    assert np.abs(rows[below, 3]).max() < 0.05
+    assert abs(st.pos[:, 1].max() - top0) < 0.1 * dx
+    assert sim.stats["escaped"] == 0
