@@ -5,7 +5,8 @@ the constant (zero) pressure condition to them at every iteration. Detection: th
 divergence of position (see :mod:`.detect`) below ``threshold`` (default 1.5 in 2D,
 2.4 in 3D; Lee et al. 2008), with wall images so that particles along a wall are not
 taken for a surface. Fires in ``sph_before_forces``: the momentum equation of that force
-evaluation sees p = 0 there, and so does the output.
+evaluation sees p = 0 there, and so does the output; the density of those particles is
+held at rho0, the density of zero Tait pressure.
 """
 
 from __future__ import annotations
@@ -52,7 +53,11 @@ class FreeSurfacePlugin:
         position_divergence(st.n, st.pos, st.rho, st.m, grid.order, grid.cell_start, grid.lo, grid.cell_size,
                             grid.ncell, sim.kernel_id, sim.h, self.normals, self.offsets, self.mirror, self.div)
         surface = self.div < self.threshold
+        # p = 0 and rho = rho0 together: the Tait pressure of rho0 is zero, so the surface
+        # density cannot drift away from the pressure it is held at (without this the
+        # continuity density of separating surface particles falls without bound)
         sim.force_pressure[surface] = 0.0
+        st.rho[surface] = sim.rho0
         self.count = int(surface.sum())
         sim.stats["free_surface_particles"] = self.count
 
