@@ -27,7 +27,7 @@ def save(sim, directory: Path) -> Path:
     if sim.drho is not None:
         arrays["drho"] = sim.drho
     meta = {"t": sim.t, "step": sim.step, "dt": sim.dt, "stats": sim.stats,
-            "counters": dict(sim.counters), "fresh": bool(getattr(sim.integrator, "fresh", False)),
+            "counters": dict(sim.counters), "fresh": bool(sim.integrator.fresh),
             "config": json.dumps(sim.case.config, default=str, sort_keys=True)}
     try:
         with open(tmp, "wb") as f:
@@ -66,5 +66,4 @@ def restore_rates(sim, meta: dict, arrays: dict) -> None:
     sim.acc[:] = arrays["acc"]
     if sim.drho is not None and "drho" in arrays:
         sim.drho[:] = arrays["drho"]
-    if hasattr(sim.integrator, "fresh"):
-        sim.integrator.fresh = meta["fresh"]
+    sim.integrator.fresh = meta["fresh"]

@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit, prange
 
 from .kernels import kernel_f, kernel_w
-from .neighbours import cell_coords
+from .neighbours import cell_coords, neighbour_cell
 
 
 @njit(cache=True)
@@ -52,7 +52,6 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
     do_av = alpha > 0.0 or beta > 0.0
     do_lam = nu > 0.0
     do_diff = delta > 0.0
-    zr = 1 if dim == 3 else 0
     n_L = L.shape[0] if use_L else 0
     for i in prange(n_dest):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
@@ -61,56 +60,47 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
         a2 = 0.0
         dr = 0.0
         pi_r = p[i] / (rho[i] * rho[i])
-        for dz in range(-zr, zr + 1):
-            z = cz + dz
-            if z < 0 or z >= ncell[2]:
+        for q in range(27):
+            c = neighbour_cell(cx, cy, cz, q, ncell, dim)
+            if c < 0:
                 continue
-            for dy in range(-1, 2):
-                y = cy + dy
-                if y < 0 or y >= ncell[1]:
+            for k in range(cell_start[c], cell_start[c + 1]):
+                j = order[k]
+                if j == i:
                     continue
-                for dx in range(-1, 2):
-                    x = cx + dx
-                    if x < 0 or x >= ncell[0]:
-                        continue
-                    c = x + ncell[0] * (y + ncell[1] * z)
-                    for k in range(cell_start[c], cell_start[c + 1]):
-                        j = order[k]
-                        if j == i:
-                            continue
-                        x0 = pos[i, 0] - pos[j, 0]
-                        x1 = pos[i, 1] - pos[j, 1]
-                        x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
-                        r2 = x0 * x0 + x1 * x1 + x2 * x2
-                        if r2 >= r2max:
-                            continue
-                        f = kernel_f(kernel_id, np.sqrt(r2), h, dim)
-                        g0 = f * x0
-                        g1 = f * x1
-                        g2 = f * x2
-                        if use_L:
-                            g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
-                        v0 = vel[i, 0] - vel[j, 0]
-                        v1 = vel[i, 1] - vel[j, 1]
-                        v2 = vel[i, 2] - vel[j, 2] if dim == 3 else 0.0
-                        vx = v0 * x0 + v1 * x1 + v2 * x2
-                        xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
-                        mj = m[j]
-                        dr += mj * (v0 * g0 + v1 * g1 + v2 * g2)
-                        if do_diff:
-                            dr += delta * h * c0 * 2.0 * (rho[i] - rho[j]) * mj / rho[j] * xg / (r2 + eta2)
-                        s = pi_r + p[j] / (rho[j] * rho[j])
-                        if do_av and vx < 0.0:
-                            mu = h * vx / (r2 + eta2)
-                            s += (-alpha * c0 * mu + beta * mu * mu) / (0.5 * (rho[i] + rho[j]))
-                        a0 -= mj * s * g0
-                        a1 -= mj * s * g1
-                        a2 -= mj * s * g2
-                        if do_lam:
-                            lam = mj * 4.0 * nu / (rho[i] + rho[j]) * xg / (r2 + eta2)
-                            a0 += lam * v0
-                            a1 += lam * v1
-                            a2 += lam * v2
+                x0 = pos[i, 0] - pos[j, 0]
+                x1 = pos[i, 1] - pos[j, 1]
+                x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
+                r2 = x0 * x0 + x1 * x1 + x2 * x2
+                if r2 >= r2max:
+                    continue
+                f = kernel_f(kernel_id, np.sqrt(r2), h, dim)
+                g0 = f * x0
+                g1 = f * x1
+                g2 = f * x2
+                if use_L:
+                    g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
+                v0 = vel[i, 0] - vel[j, 0]
+                v1 = vel[i, 1] - vel[j, 1]
+                v2 = vel[i, 2] - vel[j, 2] if dim == 3 else 0.0
+                vx = v0 * x0 + v1 * x1 + v2 * x2
+                xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
+                mj = m[j]
+                dr += mj * (v0 * g0 + v1 * g1 + v2 * g2)
+                if do_diff:
+                    dr += delta * h * c0 * 2.0 * (rho[i] - rho[j]) * mj / rho[j] * xg / (r2 + eta2)
+                s = pi_r + p[j] / (rho[j] * rho[j])
+                if do_av and vx < 0.0:
+                    mu = h * vx / (r2 + eta2)
+                    s += (-alpha * c0 * mu + beta * mu * mu) / (0.5 * (rho[i] + rho[j]))
+                a0 -= mj * s * g0
+                a1 -= mj * s * g1
+                a2 -= mj * s * g2
+                if do_lam:
+                    lam = mj * 4.0 * nu / (rho[i] + rho[j]) * xg / (r2 + eta2)
+                    a0 += lam * v0
+                    a1 += lam * v1
+                    a2 += lam * v2
         gscale = 1.0 - rho0 / rho[i] if buoyancy else 1.0
         acc[i, 0] = gscale * gravity[0] + a0
         acc[i, 1] = gscale * gravity[1] + a1
@@ -150,7 +140,6 @@ def neighbour_sums(n_dest, pos, rho, m, order, cell_start, lo, cell_size, ncell,
     """
     dim = pos.shape[1]
     r2max = (2.0 * h) ** 2
-    zr = 1 if dim == 3 else 0
     for i in prange(n_dest):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
         if want_L:
@@ -159,46 +148,37 @@ def neighbour_sums(n_dest, pos, rho, m, order, cell_start, lo, cell_size, ncell,
                     L[i, a, b] = 0.0  # accumulates M_i, inverted in place below
         num = 0.0
         den = 0.0
-        for dz in range(-zr, zr + 1):
-            z = cz + dz
-            if z < 0 or z >= ncell[2]:
+        for q in range(27):
+            c = neighbour_cell(cx, cy, cz, q, ncell, dim)
+            if c < 0:
                 continue
-            for dy in range(-1, 2):
-                y = cy + dy
-                if y < 0 or y >= ncell[1]:
+            for k in range(cell_start[c], cell_start[c + 1]):
+                j = order[k]
+                x0 = pos[i, 0] - pos[j, 0]
+                x1 = pos[i, 1] - pos[j, 1]
+                x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
+                r2 = x0 * x0 + x1 * x1 + x2 * x2
+                if r2 >= r2max:
                     continue
-                for dx in range(-1, 2):
-                    x = cx + dx
-                    if x < 0 or x >= ncell[0]:
-                        continue
-                    c = x + ncell[0] * (y + ncell[1] * z)
-                    for k in range(cell_start[c], cell_start[c + 1]):
-                        j = order[k]
-                        x0 = pos[i, 0] - pos[j, 0]
-                        x1 = pos[i, 1] - pos[j, 1]
-                        x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
-                        r2 = x0 * x0 + x1 * x1 + x2 * x2
-                        if r2 >= r2max:
-                            continue
-                        r = np.sqrt(r2)
-                        vj = m[j] / rho[j]
-                        if want_shepard:
-                            w = kernel_w(kernel_id, r, h, dim)
-                            num += m[j] * w
-                            den += vj * w
-                        if want_L and j != i:
-                            # M_ab += V_j (x_j - x_i)_a (grad_i W_ij)_b, grad_i W_ij = f x_ij
-                            c = -vj * kernel_f(kernel_id, r, h, dim)
-                            L[i, 0, 0] += c * x0 * x0
-                            L[i, 0, 1] += c * x0 * x1
-                            L[i, 1, 0] += c * x1 * x0
-                            L[i, 1, 1] += c * x1 * x1
-                            if dim == 3:
-                                L[i, 0, 2] += c * x0 * x2
-                                L[i, 1, 2] += c * x1 * x2
-                                L[i, 2, 0] += c * x2 * x0
-                                L[i, 2, 1] += c * x2 * x1
-                                L[i, 2, 2] += c * x2 * x2
+                r = np.sqrt(r2)
+                vj = m[j] / rho[j]
+                if want_shepard:
+                    w = kernel_w(kernel_id, r, h, dim)
+                    num += m[j] * w
+                    den += vj * w
+                if want_L and j != i:
+                    # M_ab += V_j (x_j - x_i)_a (grad_i W_ij)_b, grad_i W_ij = f x_ij
+                    coef = -vj * kernel_f(kernel_id, r, h, dim)
+                    L[i, 0, 0] += coef * x0 * x0
+                    L[i, 0, 1] += coef * x0 * x1
+                    L[i, 1, 0] += coef * x1 * x0
+                    L[i, 1, 1] += coef * x1 * x1
+                    if dim == 3:
+                        L[i, 0, 2] += coef * x0 * x2
+                        L[i, 1, 2] += coef * x1 * x2
+                        L[i, 2, 0] += coef * x2 * x0
+                        L[i, 2, 1] += coef * x2 * x1
+                        L[i, 2, 2] += coef * x2 * x2
         if want_shepard:
             shepard[i] = num / den if den > 0.0 else rho[i]
         if want_L:

@@ -56,48 +56,52 @@ def _correct(vel, acc_new, acc_old, half_dt):
             vel[i, d] += half_dt * (acc_new[i, d] - acc_old[i, d])
 
 
-class Euler:
+class _Scheme:
+    """What both schemes share: rates of the current state (computed once, reused while
+    ``fresh``) and the free-motion stage that ends in the boundary hook."""
+
+    name = ""
+    half_kick = 0.0  # weight of dt/2 * a in the drift: 0 for Euler, 1 for the leapfrog
+
+    def __init__(self):
+        self.fresh = False  # are sim.acc/drho the rates of the current state?
+
+    def invalidate(self):
+        """The state changed outside a step (restart, density filter): recompute rates first."""
+        self.fresh = False
+
+    def free_motion(self, sim, dt):
+        """x += dt (v + half_kick dt/2 a), v += dt a, rho += dt D; then walls and EOS."""
+        st = sim.state
+        if not self.fresh:
+            sim.compute_rates()
+        _drift(sim.pos0, st.pos, st.vel, sim.acc, dt, self.half_kick)
+        _kick(st.vel, sim.acc, dt)
+        if sim.evolves_density:
+            _kick(st.rho.reshape(-1, 1), sim.drho.reshape(-1, 1), dt)
+        sim.after_integrate(dt)
+        sim.update_pressure()
+
+
+class Euler(_Scheme):
     """Explicit (forward) Euler, the paper's scheme; rates at the start of each step."""
 
     name = "euler"
 
-    def __init__(self):
-        self.fresh = False  # are sim.acc/drho the rates of the current state?
-
     def step(self, sim, dt):
-        st = sim.state
-        if not self.fresh:
-            sim.compute_rates()
-        _drift(sim.pos0, st.pos, st.vel, sim.acc, dt, 0.0)
-        _kick(st.vel, sim.acc, dt)
-        if sim.evolves_density:
-            _kick(st.rho.reshape(-1, 1), sim.drho.reshape(-1, 1), dt)
-        sim.after_integrate(dt)
-        sim.update_pressure()
-        self.fresh = False
-
-    def invalidate(self):
+        self.free_motion(sim, dt)
         self.fresh = False
 
 
-class Leapfrog:
+class Leapfrog(_Scheme):
     """Kick-drift-kick leapfrog (see module docstring); rates from the previous step are reused."""
 
     name = "leapfrog"
-
-    def __init__(self):
-        self.fresh = False  # are sim.acc/drho the rates of the current state?
+    half_kick = 1.0
 
     def step(self, sim, dt):
         st = sim.state
-        if not self.fresh:
-            sim.compute_rates()
-        _drift(sim.pos0, st.pos, st.vel, sim.acc, dt, 1.0)
-        _kick(st.vel, sim.acc, dt)
-        if sim.evolves_density:
-            _kick(st.rho.reshape(-1, 1), sim.drho.reshape(-1, 1), dt)
-        sim.after_integrate(dt)
-        sim.update_pressure()
+        self.free_motion(sim, dt)
         sim.acc_old[:] = sim.acc
         if sim.evolves_density:
             sim.drho_old[:] = sim.drho
@@ -107,10 +111,6 @@ class Leapfrog:
             _correct(st.rho.reshape(-1, 1), sim.drho.reshape(-1, 1), sim.drho_old.reshape(-1, 1), 0.5 * dt)
             sim.update_pressure()
         self.fresh = True
-
-    def invalidate(self):
-        """The state changed outside the step (restart, reordering): recompute rates first."""
-        self.fresh = False
 
 
 SCHEMES = {"euler": Euler, "leapfrog": Leapfrog}

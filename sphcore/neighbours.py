@@ -45,6 +45,27 @@ def cell_coords(pos, i, lo, cell_size, ncell):
 
 
 @njit(cache=True)
+def neighbour_cell(cx, cy, cz, q, ncell, dim):
+    """Flat index of the q-th cell around (cx, cy, cz), q in range(27), or -1 when it lies
+    outside the grid (or off the single z layer in 2D). Kernels walk a particle's
+    neighbours as ``for q in range(27): c = neighbour_cell(...)``, then the particles
+    ``order[cell_start[c]:cell_start[c + 1]]``."""
+    z = cz + q // 9 - 1
+    if dim == 2:
+        if z != cz:
+            return -1
+    elif z < 0 or z >= ncell[2]:
+        return -1
+    y = cy + (q // 3) % 3 - 1
+    if y < 0 or y >= ncell[1]:
+        return -1
+    x = cx + q % 3 - 1
+    if x < 0 or x >= ncell[0]:
+        return -1
+    return x + ncell[0] * (y + ncell[1] * z)
+
+
+@njit(cache=True)
 def _cell_ids(pos, lo, cell_size, ncell, out):
     for i in range(pos.shape[0]):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
@@ -102,31 +123,21 @@ def neighbour_pairs(pos, order, cell_start, lo, cell_size, ncell, radius):
     r2max = radius * radius
     out_i = []
     out_j = []
-    zr = 1 if dim == 3 else 0
     for i in range(n):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
-        for dz in range(-zr, zr + 1):
-            z = cz + dz
-            if z < 0 or z >= ncell[2]:
+        for q in range(27):
+            c = neighbour_cell(cx, cy, cz, q, ncell, dim)
+            if c < 0:
                 continue
-            for dy in range(-1, 2):
-                y = cy + dy
-                if y < 0 or y >= ncell[1]:
+            for k in range(cell_start[c], cell_start[c + 1]):
+                j = order[k]
+                if j == i:
                     continue
-                for dx in range(-1, 2):
-                    x = cx + dx
-                    if x < 0 or x >= ncell[0]:
-                        continue
-                    c = x + ncell[0] * (y + ncell[1] * z)
-                    for k in range(cell_start[c], cell_start[c + 1]):
-                        j = order[k]
-                        if j == i:
-                            continue
-                        r2 = 0.0
-                        for d in range(dim):
-                            dd = pos[i, d] - pos[j, d]
-                            r2 += dd * dd
-                        if r2 < r2max:
-                            out_i.append(i)
-                            out_j.append(j)
+                r2 = 0.0
+                for d in range(dim):
+                    dd = pos[i, d] - pos[j, d]
+                    r2 += dd * dd
+                if r2 < r2max:
+                    out_i.append(i)
+                    out_j.append(j)
     return np.array(out_i, dtype=np.int64), np.array(out_j, dtype=np.int64)

@@ -233,8 +233,7 @@ class Simulation:
                        grid.ncell, self.kernel_id, self.h, False, self.L, True, self.shepard)
         st.rho[:] = self.shepard
         self.update_pressure()
-        if hasattr(self.integrator, "invalidate"):
-            self.integrator.invalidate()
+        self.integrator.invalidate()
         self.counters["shepard_filter"] += 1
 
     def after_integrate(self, dt):

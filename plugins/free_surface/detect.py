@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphcore.kernels import kernel_f
-from sphcore.neighbours import cell_coords
+from sphcore.neighbours import cell_coords, neighbour_cell
 
 
 @njit(cache=True, parallel=True)
@@ -24,45 +24,35 @@ def position_divergence(n, pos, rho, m, order, cell_start, lo, cell_size, ncell,
     """div r (dimensionless) for the first n particles; wall images included when ``mirror``."""
     dim = pos.shape[1]
     r2max = (2.0 * h) ** 2
-    zr = 1 if dim == 3 else 0
     nplanes = normals.shape[0]
     for i in prange(n):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
         s = 0.0
-        for dz in range(-zr, zr + 1):
-            z = cz + dz
-            if z < 0 or z >= ncell[2]:
+        for q in range(27):
+            c = neighbour_cell(cx, cy, cz, q, ncell, dim)
+            if c < 0:
                 continue
-            for dy in range(-1, 2):
-                y = cy + dy
-                if y < 0 or y >= ncell[1]:
+            for k in range(cell_start[c], cell_start[c + 1]):
+                j = order[k]
+                vj = m[j] / rho[j]
+                r2 = 0.0
+                for d in range(dim):
+                    e = pos[i, d] - pos[j, d]
+                    r2 += e * e
+                if j != i and r2 < r2max:
+                    s -= vj * kernel_f(kernel_id, np.sqrt(r2), h, dim) * r2
+                if not mirror:
                     continue
-                for dx in range(-1, 2):
-                    x = cx + dx
-                    if x < 0 or x >= ncell[0]:
+                for p in range(nplanes):
+                    dj = -offsets[p]
+                    for d in range(dim):
+                        dj += normals[p, d] * pos[j, d]
+                    if dj >= 2.0 * h:
                         continue
-                    c = x + ncell[0] * (y + ncell[1] * z)
-                    for k in range(cell_start[c], cell_start[c + 1]):
-                        j = order[k]
-                        vj = m[j] / rho[j]
-                        r2 = 0.0
-                        for d in range(dim):
-                            e = pos[i, d] - pos[j, d]
-                            r2 += e * e
-                        if j != i and r2 < r2max:
-                            s -= vj * kernel_f(kernel_id, np.sqrt(r2), h, dim) * r2
-                        if not mirror:
-                            continue
-                        for p in range(nplanes):
-                            dj = -offsets[p]
-                            for d in range(dim):
-                                dj += normals[p, d] * pos[j, d]
-                            if dj >= 2.0 * h:
-                                continue
-                            r2 = 0.0
-                            for d in range(dim):
-                                e = pos[i, d] - (pos[j, d] - 2.0 * dj * normals[p, d])
-                                r2 += e * e
-                            if r2 < r2max and r2 > 0.0:
-                                s -= vj * kernel_f(kernel_id, np.sqrt(r2), h, dim) * r2
+                    r2 = 0.0
+                    for d in range(dim):
+                        e = pos[i, d] - (pos[j, d] - 2.0 * dj * normals[p, d])
+                        r2 += e * e
+                    if r2 < r2max and r2 > 0.0:
+                        s -= vj * kernel_f(kernel_id, np.sqrt(r2), h, dim) * r2
         out[i] = s
