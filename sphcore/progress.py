@@ -14,8 +14,9 @@ class Progress:
         if mode == "auto":
             mode = "bar" if self.stream.isatty() else "log"
         self.mode, self.t_end, self.n, self.interval = mode, t_end, n, interval_s
-        self.start = self.last_log = time.perf_counter()
+        self.start = self.last_log = self.last_draw = time.perf_counter()
         self.steps0 = None
+        self.t0 = 0.0  # simulated time at the first update (a restart starts later)
         self.bar = None
         if mode == "bar":
             from tqdm import tqdm
@@ -31,19 +32,25 @@ class Progress:
     def update(self, sim):
         if self.steps0 is None:
             self.steps0 = sim.step - 1
+            self.t0 = sim.t - sim.dt
         if self.mode == "off":
             return
-        sps, psps = self.rates(sim.step)
+        now = time.perf_counter()
         if self.bar is not None:
+            if now - self.last_draw < 0.1 and sim.t < self.t_end:
+                return  # redraw at most ten times a second
+            self.last_draw = now
+            sps, psps = self.rates(sim.step)
             self.bar.n = min(sim.t, self.t_end)
             self.bar.set_postfix_str(f"{sps:.0f} steps/s, {psps:.3g} particle-steps/s", refresh=False)
             self.bar.refresh()
             return
-        now = time.perf_counter()
         if now - self.last_log >= self.interval:
             self.last_log = now
+            sps, psps = self.rates(sim.step)
             frac = sim.t / self.t_end
-            eta = (now - self.start) * (1 - frac) / frac if frac > 0 else float("nan")
+            done = (sim.t - self.t0) / max(self.t_end - self.t0, 1e-300)  # of this process's share
+            eta = (now - self.start) * (1 - done) / done if done > 0 else float("nan")
             print(f"[sph] t = {sim.t:.5g}/{self.t_end:.5g} s ({100 * frac:.1f}%), step {sim.step}, "
                   f"dt = {sim.dt:.3g} s, {sps:.0f} steps/s, {psps:.3g} particle-steps/s, ETA {eta:.0f} s",
                   file=self.stream, flush=True)

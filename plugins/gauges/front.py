@@ -81,7 +81,6 @@ class FrontGauge:
         self.cfg = case.config["front_gauge"]
         self.floor = float(case.config["domain"]["min"][1]) if case.config["domain"]["min"] else 0.0
         self.x_wall = float(case.config["domain"]["max"][0]) if case.config["domain"]["max"] else math.inf
-        self.samples = []
         self.next_t = 0.0
 
     @hookimpl
@@ -91,9 +90,12 @@ class FrontGauge:
             x = sim.state.pos[:, 0]
             a = float(x.max() - x.min() + 2 * sim.state.radius.max())
         self.a = a
-        if not sim.restarting:
+        # samples live in sim.stats, which the checkpoint keeps: a restarted run continues
+        # the series instead of starting a new one
+        self.samples = sim.stats.setdefault("front_gauge_samples", [])
+        if not self.samples:
             self._sample(sim)
-            self.next_t = self.cfg["every_dt"]
+        self.next_t = (math.floor(sim.t / self.cfg["every_dt"] + 1e-9) + 1) * self.cfg["every_dt"]
 
     def _sample(self, sim):
         st = sim.state
@@ -107,6 +109,8 @@ class FrontGauge:
 
     @hookimpl
     def sph_summary(self, sim):
+        if not self.samples:
+            return None
         t, x = np.array(self.samples).T
         if sim.output_dir is not None and sim.output_dir.exists():
             np.savetxt(sim.output_dir / "front.csv", np.c_[t, x], delimiter=",", header="t_s,x_front_m",

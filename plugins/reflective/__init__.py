@@ -42,9 +42,6 @@ class ReflectivePlugin:
         # per-particle kernel outputs, resized when the particle count changes
         self._guarded = np.zeros(0, np.int8)
         self._counts = np.zeros(0, np.int32)
-        self.escaped = 0  # particle-steps that needed the guard
-        self.reflected = 0  # particle-steps with at least one reflection
-        self.reflection_events = 0  # all reflections
 
     @hookimpl
     def sph_options(self):
@@ -115,15 +112,15 @@ class ReflectivePlugin:
                           self.cr, self.max_reflections, self.velocity_at_contact,
                           self._guarded, self._counts)
         hit = int(np.count_nonzero(self._counts))
-        self.escaped += guarded
-        self.reflected += hit
+        # counters live in sim.stats, which checkpoints keep: cumulative across restarts
+        stats = sim.stats
+        stats["escaped"] = stats.get("escaped", 0) + guarded  # particle-steps put back by the guard
+        stats["reflected"] = stats.get("reflected", 0) + hit  # particle-steps with a reflection
         if hit:
-            self.reflection_events += int(self._counts.sum(dtype=np.int64))
-        sim.stats["escaped"] = sim.stats.get("escaped", 0) + guarded
-        sim.stats["reflected"] = sim.stats.get("reflected", 0) + hit
+            stats["reflection_events"] = stats.get("reflection_events", 0) + int(self._counts.sum(dtype=np.int64))
 
     @hookimpl
     def sph_summary(self, sim):
         """Guarded particle-steps, particle-steps with reflections, and all reflections."""
-        return {"escaped": self.escaped, "reflections": self.reflected,
-                "reflection_events": self.reflection_events}
+        return {"escaped": sim.stats.get("escaped", 0), "reflections": sim.stats.get("reflected", 0),
+                "reflection_events": sim.stats.get("reflection_events", 0)}
