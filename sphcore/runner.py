@@ -48,7 +48,7 @@ def output_path(case, output=None) -> Path:
 
 def prepare_output(out: Path, overwrite=False, restart=False) -> Path:
     """Create the output directory; never clobber one silently."""
-    if out.exists() and any(out.iterdir()) and not restart:
+    if out.exists() and (not out.is_dir() or any(out.iterdir())) and not restart:  # a file is never a run's directory
         if not overwrite:
             raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or --output DIR")
         if not (out / MARKER).exists():
