@@ -48,3 +48,28 @@ def scan(pos, vel, rho, rho_lo, rho_hi, check_rho, normals, offsets):
     if i_hi >= 0:
         return RHO_HIGH, i_hi, worst_hi
     return OK, -1, 0.0
+
+
+@njit(cache=True)
+def total_energy(pos, vel, rho, m, gravity, rho0, c0, gamma, with_internal):
+    """Kinetic + potential + Tait internal energy (J, or J/m in 2D).
+
+    The internal energy per unit mass of the Tait fluid, u(rho) = int p / rho^2 d rho,
+    relative to u(rho0): B (rho^(gamma-1) / (rho0^gamma (gamma-1)) + 1/rho) - (same at rho0),
+    B = c0^2 rho0 / gamma.
+    """
+    n, dim = pos.shape
+    b = c0 * c0 * rho0 / gamma
+    u0 = b * (rho0 ** (gamma - 1.0) / (rho0 ** gamma * (gamma - 1.0)) + 1.0 / rho0)
+    e = 0.0
+    for i in range(n):
+        k = 0.0
+        pe = 0.0
+        for d in range(dim):
+            k += vel[i, d] * vel[i, d]
+            pe -= gravity[d] * pos[i, d]
+        u = 0.0
+        if with_internal:
+            u = b * (rho[i] ** (gamma - 1.0) / (rho0 ** gamma * (gamma - 1.0)) + 1.0 / rho[i]) - u0
+        e += m[i] * (0.5 * k + pe + u)
+    return e

@@ -1,4 +1,4 @@
-"""The ``sph`` command: run, check, plugins.
+"""The ``sph`` command: run, check, plugins, sweep (:mod:`sphcore.sweep`).
 
 Exit status: 0 done; 1 the run went unstable or could not write its output (what was
 written is kept); 2 bad input (case, options, output directory), nothing written; 128 + signal number when stopped by SIGINT
@@ -30,7 +30,34 @@ def _parser():
     c.add_argument("case_dir")
     c.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     sub.add_parser("plugins", help="list installed plugins and the hooks they implement")
+    _sweep_parser(sub)
     return p
+
+
+# -- sph sweep: the grid of variants on Dask lives in sphcore/sweep.py -------------------
+def _sweep_parser(sub):
+    w = sub.add_parser("sweep", help="run a grid of case variants on Dask, gather them in sweep.nc",
+                       description="Run every combination of the --vary values as a Dask task; write "
+                       "<output>/sweep.nc, print a table and draw <output>/pareto.png. See docs/sweep.md.")
+    w.add_argument("case_dir")
+    w.add_argument("--vary", action="append", default=[], metavar="KEY=V1,V2,...",
+                   help="values of a case key, split on commas outside brackets, each read as TOML like --set "
+                   "(plugins.use=[\"ghost\"],[\"reflective\"]); linked keys: K1,K2=[a1,a2],[b1,b2]; "
+                   "KEY may index an array of tables (blocks[0].count); repeatable: the Cartesian product")
+    w.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a case key in every variant (value read as TOML), repeatable")
+    w.add_argument("--t-end", type=float, help="simulated time to reach (s) in every variant")
+    w.add_argument("--output", help="sweep directory (default: <case>/sweep)")
+    w.add_argument("--overwrite", action="store_true", help="replace a sweep directory written by sph")
+    w.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler (tcp://host:8786) instead of a local "
+                   "cluster; its workers must see the case and output paths")
+    w.add_argument("--workers", type=int, help="local cluster size (default: one per core)")
+    w.add_argument("--timeout", type=float, metavar="SECONDS", help="stop a variant after this wall time (status "
+                   "'timeout', checkpoint written)")
+    w.add_argument("--error", metavar="KEY", help="summary key plotted against wall time (default: the first of "
+                   "err_cruchaga_0.20s, rms_rel_err_martin_moyce_T3, pressure_max_layer_err present)")
+    w.add_argument("--progress", choices=("auto", "bar", "log", "off"))
+    w.add_argument("--dry-run", action="store_true", help="validate and list the variants, run nothing")
 
 
 def _fail(msg, status):
@@ -40,6 +67,10 @@ def _fail(msg, status):
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
+    if args.command == "sweep":
+        from .sweep import main as sweep_main
+
+        return sweep_main(args)
     from . import pluginhost, runner
 
     try:

@@ -10,6 +10,7 @@ import os
 import resource
 import shutil
 import signal
+import threading
 import time
 from pathlib import Path
 
@@ -89,7 +90,10 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     def on_signal(signum, frame):
         stop["signum"] = signum
 
-    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    # signal handlers can only be installed from the main thread (a Dask worker runs tasks
+    # in threads): elsewhere the run just has no checkpoint-on-signal
+    old = ({s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+           if threading.current_thread() is threading.main_thread() else {})
     mode = "off" if quiet else (progress or case.config["output"]["progress"])
     bar = Progress(sim.t_end, sim.state.n, mode, case.config["output"]["log_interval_s"])
     start, step0, status, message = time.perf_counter(), sim.step, "failed", "an unexpected error (a bug: see the traceback)"
@@ -124,6 +128,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
             "t": sim.t, "wall_time_s": wall, "steps": steps, "n_particles": sim.state.n,
             "particle_steps_per_s": steps * sim.state.n / wall if wall > 0 else 0.0,
             "escaped": int(sim.stats.get("escaped", 0)), "peak_memory_mb": peak_memory_mb(),
+            "energy_growth_max": sim.stats.get("energy_growth_max", 0.0),
             "c0": sim.c0, "h": sim.h, "plugins": case.config["plugins"]["use"],
             "counters": dict(sim.counters),
         }

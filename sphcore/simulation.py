@@ -120,6 +120,10 @@ class Simulation:
         if saved:
             checkpoint.restore_rates(self, *saved)
         self.update_pressure()
+        # energy can only fall unless a plugin does work on the particles (adds accelerations)
+        self.check_energy = (cfg["checks"]["energy_growth"] > 0
+                             and not pm.hook.sph_accelerations.get_hookimpls())
+        self._energy_reference()
 
     def _hydrostatic_start(self, tops):
         """p = rho0 g (top - z) below each block's top, rho from the inverse Tait equation."""
@@ -278,6 +282,22 @@ class Simulation:
             self.check()
         self.pm.hook.sph_after_step(sim=self)
 
+    def energy(self) -> float:
+        """Kinetic + potential + Tait internal energy (J; J/m in 2D); see checks.total_energy."""
+        st = self.state
+        return checks.total_energy(st.pos, st.vel, st.rho, st.m, self.gravity, self.rho0, self.c0 or 1.0,
+                                   self.gamma, self.evolves_density)
+
+    def _energy_reference(self):
+        """E at the start of the run (kept in stats, so a restart checks against the same
+        reference) and the scale growth is measured in: M |g| H + the start's kinetic energy."""
+        st = self.state
+        if "energy_start" not in self.stats:
+            z = st.pos @ self.up if self.g_abs > 0 else np.zeros(st.n)
+            kinetic = 0.5 * float(np.sum(st.m * np.einsum("ij,ij->i", st.vel, st.vel)))
+            self.stats["energy_start"] = self.energy()
+            self.stats["energy_scale"] = float(st.m.sum()) * self.g_abs * float(np.ptp(z) + self.case.dx) + kinetic
+
     def check(self):
         st, ck = self.state, self.case.config["checks"]
         code, i, value = checks.scan(st.pos, st.vel, st.rho, ck["rho_min"] * self.rho0, ck["rho_max"] * self.rho0,
@@ -288,6 +308,15 @@ class Simulation:
             if code in (checks.RHO_LOW, checks.RHO_HIGH):
                 detail += f" kg/m^3, bounds [{ck['rho_min'] * self.rho0:.6g}, {ck['rho_max'] * self.rho0:.6g}]"
             raise Instability(self.step, self.t, int(st.id[i]), detail)
+        if self.check_energy and self.stats["energy_scale"] > 0:
+            growth = (self.energy() - self.stats["energy_start"]) / self.stats["energy_scale"]
+            self.stats["energy_growth_max"] = max(self.stats.get("energy_growth_max", 0.0), growth)
+            if growth > ck["energy_growth"]:
+                fastest = int(st.id[np.argmax(np.einsum("ij,ij->i", st.vel, st.vel))])
+                raise Instability(self.step, self.t, fastest,
+                                  f"total energy grew by {100 * growth:.2f}% of its scale (limit "
+                                  f"{100 * ck['energy_growth']:g}%): numerical instability, e.g. a time step "
+                                  f"too large or too little dissipation")
 
     def output(self, final=False):
         self.pm.hook.sph_output(sim=self, final=final)

@@ -1,0 +1,232 @@
+"""Sweep specifications: ``--vary`` value lists, indexed keys and the grid of variants.
+
+Syntax (see docs/sweep.md):
+
+- ``--vary KEY=V1,V2,...``: the values are split on the commas that lie outside brackets,
+  braces and quoted strings, so an item may be a TOML array or inline table
+  (``plugins.use=["ghost"],["reflective","ghost"]``). Each item is read exactly like a
+  ``--set`` value: as TOML, or as a bare string when it is not valid TOML
+  (``kernel.name=cubic_spline,wendland_c2``).
+- ``--vary K1,K2=[a1,a2],[b1,b2]``: linked keys. The keys change together; each item is a
+  TOML array holding one value per key (the resolution and the time to reach, say).
+- ``KEY`` is ``section.key``, or reaches into an array of tables by index:
+  ``blocks[0].count``, ``domain.planes[1].normal``.
+
+Several ``--vary`` options make the Cartesian product, the first one slowest.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import re
+from dataclasses import dataclass, field
+
+from .case import parse_override
+from .errors import CaseError
+
+_SEGMENT = re.compile(r"^([A-Za-z0-9_-]+)((?:\[\d+\])*)$")
+_OPEN, _CLOSE = "[{", "]}"
+
+
+# -- keys and values -------------------------------------------------------------------
+
+def parse_key(text: str, option: str = "--vary") -> tuple:
+    """``"blocks[0].count"`` -> ``("blocks", 0, "count")``; at least section and key."""
+    path = []
+    for seg in text.strip().split("."):
+        m = _SEGMENT.match(seg)
+        if not m:
+            raise CaseError(option, text, "expected section.key or table[index].key (e.g. time.cfl, blocks[0].count)")
+        path.append(m.group(1))
+        path += [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
+    if len(path) < 2:
+        raise CaseError(option, text, "expected section.key (e.g. time.cfl)")
+    return tuple(path)
+
+
+def key_text(path) -> str:
+    """The inverse of :func:`parse_key`."""
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else p)
+    return out
+
+
+def parse_value(raw: str):
+    """A value as ``--set`` reads it: TOML, or a bare string (one parser for both)."""
+    return parse_override(f"v.v={raw}")[1]
+
+
+def split_values(text: str, key: str = "") -> list[str]:
+    """Split on commas at bracket/brace depth 0 and outside quoted strings."""
+    items, depth, quote, cur, i = [], 0, None, [], 0
+    while i < len(text):
+        c = text[i]
+        cur.append(c)
+        if quote:
+            if c == "\\" and quote == '"' and i + 1 < len(text):  # escape in a TOML basic string
+                cur.append(text[i + 1])
+                i += 1
+            elif c == quote:
+                quote = None
+        elif c in "\"'":
+            quote = c
+        elif c in _OPEN:
+            depth += 1
+        elif c in _CLOSE:
+            depth -= 1
+            if depth < 0:
+                raise CaseError("--vary", key, f"unbalanced '{c}' in {text!r}")
+        elif c == "," and depth == 0:
+            cur.pop()
+            items.append("".join(cur).strip())
+            cur = []
+        i += 1
+    if quote or depth:
+        raise CaseError("--vary", key, f"unclosed {'quote' if quote else 'bracket'} in {text!r}")
+    items.append("".join(cur).strip())
+    if not all(items):
+        raise CaseError("--vary", key, f"an empty value in {text!r} (values are separated by single commas)")
+    return items
+
+
+# -- axes and variants -----------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Axis:
+    """One ``--vary``: its keys (several when linked) and, per point, one value per key."""
+
+    paths: tuple  # of key paths
+    points: tuple  # of tuples, one value per key
+    texts: tuple  # the items as written, for names and labels
+
+    @property
+    def keys(self) -> list[str]:
+        return [key_text(p) for p in self.paths]
+
+    def __len__(self):
+        return len(self.points)
+
+
+@dataclass
+class Variant:
+    index: int
+    name: str  # directory name: index, then label=value per varied key
+    values: dict  # key text -> value
+    overrides: list = field(default_factory=list)  # (path, value) pairs, --set ones first
+    combo: tuple = ()  # the index of its point along each axis
+
+
+def parse_vary(text: str) -> Axis:
+    """One ``--vary`` option (see the module docstring)."""
+    if "=" not in text:
+        raise CaseError("--vary", text, "expected KEY=V1,V2,... (or K1,K2=[a1,a2],[b1,b2])")
+    lhs, rhs = text.split("=", 1)
+    keys = [k.strip() for k in lhs.split(",")]
+    paths = tuple(parse_key(k) for k in keys)
+    items = split_values(rhs, lhs.strip())
+    values = [parse_value(item) for item in items]
+    if len(paths) == 1:
+        points = tuple((v,) for v in values)
+    else:
+        for item, v in zip(items, values):
+            if not isinstance(v, list) or len(v) != len(paths):
+                raise CaseError("--vary", lhs.strip(), f"linked keys take one TOML array of {len(paths)} values "
+                                f"per variant, got {item!r}")
+        points = tuple(tuple(v) for v in values)
+    return Axis(paths, points, tuple(items))
+
+
+def parse_set(text: str) -> tuple:
+    """One ``--set KEY=VALUE`` of a sweep: (path, value); KEY may hold indices."""
+    if "=" not in text:
+        raise CaseError("--set", text, "expected section.key=value")
+    key, raw = text.split("=", 1)
+    return parse_key(key, "--set"), parse_value(raw)
+
+
+def _labels(axes) -> list[str]:
+    """Short labels for names: the last key segment, the whole key where those collide."""
+    paths = [p for a in axes for p in a.paths]
+    short = [str(next(s for s in reversed(p) if isinstance(s, str))) for p in paths]
+    return [s if short.count(s) == 1 else key_text(p) for s, p in zip(short, paths)]
+
+
+def _clean(text: str) -> str:
+    text = re.sub(r"[\s\"'\[\]{}]", "", text).replace(",", "-")
+    return re.sub(r"[^A-Za-z0-9._=+-]", "_", text)[:40]
+
+
+def expand(axes, sets=()) -> list[Variant]:
+    """The Cartesian product of the axes, in order (the first axis slowest)."""
+    keys = [k for a in axes for k in a.keys]
+    dup = {k for k in keys if keys.count(k) > 1}
+    if dup:
+        raise CaseError("--vary", sorted(dup)[0], "varied twice: give its values in one --vary")
+    labels = _labels(axes)
+    base = [parse_set(s) if isinstance(s, str) else s for s in sets]
+    out = []
+    for index, combo in enumerate(itertools.product(*(range(len(a)) for a in axes))):
+        values, bits, overrides, li = {}, [], list(base), 0
+        for a, j in zip(axes, combo):
+            linked = len(a.paths) > 1
+            for m, (path, v) in enumerate(zip(a.paths, a.points[j])):
+                values[key_text(path)] = v
+                overrides.append((path, v))
+                text = _clean(repr(v) if linked else a.texts[j])
+                bits.append(f"{labels[li]}={text}")
+                li += 1
+        name = "_".join([f"{index:03d}"] + bits) if bits else f"{index:03d}"
+        out.append(Variant(index, name, values, overrides, combo))
+    return out
+
+
+# -- indexed keys ------------------------------------------------------------------------
+
+def fold(raw: dict, overrides, file="--set") -> list:
+    """``(path, value)`` pairs that :func:`sphcore.case.apply_overrides` takes: an override
+    that reaches into an array of tables (``blocks[0].count``) becomes one that replaces
+    the whole array (``blocks``) with a copy carrying the change. ``raw`` is the case's
+    TOML as read; overrides apply in order, as ``apply_overrides`` would."""
+    work, out = copy.deepcopy(raw), []
+    for path, value in overrides:
+        path = tuple(path)
+        node = work
+        for depth, part in enumerate(path[:-1]):
+            node = _child(node, part, path, depth, file)
+        last = path[-1]
+        if isinstance(last, int):
+            _check_index(node, last, path, len(path) - 1, file)
+        elif not isinstance(node, dict):
+            raise CaseError(file, key_text(path), f"{key_text(path[:-1])} is not a table")
+        node[last] = copy.deepcopy(value)
+        first = next((d for d, p in enumerate(path) if isinstance(p, int)), None)
+        if first is None:
+            out.append((list(path), value))
+        else:
+            head = path[:first]
+            array = work
+            for part in head:
+                array = array[part]
+            out.append((list(head), copy.deepcopy(array)))
+    return out
+
+
+def _check_index(node, i, path, depth, file):
+    where = key_text(path[:depth])
+    if not isinstance(node, list):
+        raise CaseError(file, key_text(path), f"{where} is not an array of tables in the case")
+    if i >= len(node):
+        raise CaseError(file, key_text(path), f"index {i} out of range: the case has {len(node)} {where} entries")
+
+
+def _child(node, part, path, depth, file):
+    if isinstance(part, int):
+        _check_index(node, part, path, depth, file)
+        return node[part]
+    if not isinstance(node, dict):
+        raise CaseError(file, key_text(path), f"{key_text(path[:depth])} is not a table")
+    if part not in node and depth + 1 < len(path) and isinstance(path[depth + 1], int):
+        raise CaseError(file, key_text(path), f"the case has no {key_text(path[:depth + 1])} array to index")
+    return node.setdefault(part, {})
