@@ -73,7 +73,7 @@ CORE: dict[str, dict[str, O]] = {
     "checks": {
         "rho_min": O(0.5, "float", doc="stop when a density falls below rho_min * rho0", positive=True),
         "rho_max": O(1.5, "float", doc="stop when a density exceeds rho_max * rho0", positive=True),
-        "every": O(1, "int", doc="check for NaN / density bounds / energy every N steps", positive=True),
+        "every": O(1, "int", doc="check for NaN and density bounds every N steps (energy every 10 N)", positive=True),
         "energy_growth": O(0.01, "float", doc="stop when kinetic + potential + internal energy exceeds its start "
                            "by this fraction of M |g| H + the start's kinetic energy (walls with CR <= 1 and "
                            "viscosity only remove energy, so growth is a numerical instability); 0 is off; not checked when a "

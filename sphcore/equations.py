@@ -60,7 +60,7 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
         a2 = 0.0
         dr = 0.0
         pi_r = p[i] / (rho[i] * rho[i])
-        for q in range(27):
+        for q in range(3 ** dim):
             c = neighbour_cell(cx, cy, cz, q, ncell, dim)
             if c < 0:
                 continue
@@ -148,7 +148,7 @@ def neighbour_sums(n_dest, pos, rho, m, order, cell_start, lo, cell_size, ncell,
                     L[i, a, b] = 0.0  # accumulates M_i, inverted in place below
         num = 0.0
         den = 0.0
-        for q in range(27):
+        for q in range(3 ** dim):
             c = neighbour_cell(cx, cy, cz, q, ncell, dim)
             if c < 0:
                 continue

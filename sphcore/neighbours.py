@@ -46,15 +46,16 @@ def cell_coords(pos, i, lo, cell_size, ncell):
 
 @njit(cache=True)
 def neighbour_cell(cx, cy, cz, q, ncell, dim):
-    """Flat index of the q-th cell around (cx, cy, cz), q in range(27), or -1 when it lies
-    outside the grid (or off the single z layer in 2D). Kernels walk a particle's
-    neighbours as ``for q in range(27): c = neighbour_cell(...)``, then the particles
+    """Flat index of the q-th cell around (cx, cy, cz), or -1 when it lies outside the grid.
+
+    q runs over ``range(3 ** dim)``: the 9 cells of the particle's layer in 2D, the 27 of
+    the three layers in 3D. Kernels walk a particle's neighbours as
+    ``for q in range(3 ** dim): c = neighbour_cell(...)``, then the particles
     ``order[cell_start[c]:cell_start[c + 1]]``."""
-    z = cz + q // 9 - 1
     if dim == 2:
-        if z != cz:
-            return -1
-    elif z < 0 or z >= ncell[2]:
+        q += 9  # the middle layer: z = cz
+    z = cz + q // 9 - 1
+    if z < 0 or z >= ncell[2]:
         return -1
     y = cy + (q // 3) % 3 - 1
     if y < 0 or y >= ncell[1]:
@@ -125,7 +126,7 @@ def neighbour_pairs(pos, order, cell_start, lo, cell_size, ncell, radius):
     out_j = []
     for i in range(n):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
-        for q in range(27):
+        for q in range(3 ** dim):
             c = neighbour_cell(cx, cy, cz, q, ncell, dim)
             if c < 0:
                 continue

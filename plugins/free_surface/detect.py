@@ -28,7 +28,7 @@ def position_divergence(n, pos, rho, m, order, cell_start, lo, cell_size, ncell,
     for i in prange(n):
         cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
         s = 0.0
-        for q in range(27):
+        for q in range(3 ** dim):
             c = neighbour_cell(cx, cy, cz, q, ncell, dim)
             if c < 0:
                 continue
