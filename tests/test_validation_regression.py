@@ -138,3 +138,20 @@ def test_time_step_past_the_stability_limit_is_caught_by_energy_growth():
     sim = sim_of("dam_break", ['plugins.use=["reflective"]'], 0.02)
     run(sim)
     assert sim.stats["energy_growth_max"] < 1e-4
+
+
+def test_spheres_at_rest_50000_steps_bit_for_bit():
+    """The paper's section 4.1 rigid spheres (cases/spheres_at_rest as shipped: unit box,
+    50 x 50 spheres touching each other and the walls, CR = 0, no SPH forces, 50,000 steps):
+    the reflective boundary detects the contacts and leaves every position and velocity
+    exactly as it was."""
+    case_, pm = runner.load(CASES / "spheres_at_rest")
+    sim = Simulation(case_, pm)
+    pos0, vel0 = sim.state.pos.copy(), sim.state.vel.copy()
+    run(sim)
+    assert sim.step == 50_000
+    assert np.array_equal(sim.state.pos, pos0) and np.array_equal(sim.state.vel, vel0)
+    assert sim.stats["escaped"] == 0
+    # the contact is really there: the outer spheres touch the walls (d == r)
+    d = case_.planes.distances(sim.state.pos)
+    assert np.isclose(d, 0.01, rtol=0, atol=1e-15).any(axis=0).all()
