@@ -29,7 +29,7 @@ from sphcore.errors import OutputError
 from sphcore.hookspecs import hookimpl
 from sphcore.particles import FLUID, GHOST, SPHERE
 
-from .schedule import Schedule, schedule_options
+from .writer import ScheduledWriter
 
 TABLE = "netcdf"
 FILE_NAME = "particles.nc"
@@ -97,48 +97,18 @@ def _fail(path: Path, what: str, err: Exception) -> OutputError:
     return OutputError(f"{path}: cannot {what}: {reason}")
 
 
-class NetcdfWriter:
+class NetcdfWriter(ScheduledWriter):
     """Pluggy plugin ``netcdf``: all frames in ``<output_dir>/particles.nc`` on the ``[netcdf]`` schedule."""
 
+    table = TABLE
+    what = "netCDF frame"
+
     def __init__(self):
-        self.schedule = Schedule()  # replaced from the case in sph_configure
+        super().__init__()
         self.ds: netCDF4.Dataset | None = None  # opened at the first frame due, not before
         self.path: Path | None = None
         self.row = 0  # index along time of the next frame
         self.ids: np.ndarray | None = None  # the file's particle ids (sorted)
-        self._failed = False  # after an OutputError, stay silent (the run is stopping)
-        self._restart_pending = False
-
-    # ---------------------------------------------------------------- hooks
-
-    @hookimpl
-    def sph_options(self):
-        return {TABLE: schedule_options("netCDF frame")}
-
-    @hookimpl
-    def sph_configure(self, case):
-        self.schedule = Schedule.from_config(case, TABLE)
-
-    @hookimpl
-    def sph_setup(self, sim):
-        # A restart's files are put in order at the first output call, not here: the core
-        # fires sph_setup before it loads the checkpoint, so sim.t and sim.step are not
-        # yet those of the restart point.
-        self._restart_pending = bool(getattr(sim, "restarting", False))
-
-    @hookimpl
-    def sph_output(self, sim, final):
-        if self._failed:
-            return
-        try:
-            if self._restart_pending:
-                self._restart_pending = False
-                self.reopen_for_restart(sim)
-            if self.schedule.due(sim.t, sim.step, final):
-                self.write_frame(sim)
-        except OutputError:
-            self._failed = True
-            raise
 
     @hookimpl
     def sph_summary(self, sim):

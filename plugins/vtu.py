@@ -25,7 +25,7 @@ import numpy as np
 from sphcore.errors import OutputError
 from sphcore.hookspecs import hookimpl
 
-from .schedule import Schedule, schedule_options
+from .writer import ScheduledWriter
 
 TABLE = "vtu"
 
@@ -98,45 +98,15 @@ def read_pvd(path: Path) -> list[tuple[float, str]]:
     return [(float(e.get("timestep")), e.get("file")) for e in root.iter("DataSet")]
 
 
-class VtuWriter:
+class VtuWriter(ScheduledWriter):
     """Pluggy plugin ``vtu``: particle frames for ParaView on the ``[vtu]`` schedule."""
 
+    table = TABLE
+    what = "VTU frame"
+
     def __init__(self):
-        self.schedule = Schedule()  # replaced from the case in sph_configure
+        super().__init__()
         self.frames: list[tuple[float, str]] = []  # (t in s, file relative to output_dir)
-        self._failed = False  # after an OutputError, stay silent (the run is stopping)
-        self._restart_pending = False
-
-    # ---------------------------------------------------------------- hooks
-
-    @hookimpl
-    def sph_options(self):
-        return {TABLE: schedule_options("VTU frame")}
-
-    @hookimpl
-    def sph_configure(self, case):
-        self.schedule = Schedule.from_config(case, TABLE)
-
-    @hookimpl
-    def sph_setup(self, sim):
-        # A restart's files are put in order at the first output call, not here: the core
-        # fires sph_setup before it loads the checkpoint, so sim.t and sim.step are not
-        # yet those of the restart point.
-        self._restart_pending = bool(getattr(sim, "restarting", False))
-
-    @hookimpl
-    def sph_output(self, sim, final):
-        if self._failed:
-            return
-        try:
-            if self._restart_pending:
-                self._restart_pending = False
-                self.reopen_for_restart(sim)
-            if self.schedule.due(sim.t, sim.step, final):
-                self.write_frame(sim)
-        except OutputError:
-            self._failed = True
-            raise
 
     @hookimpl
     def sph_summary(self, sim):
