@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from sphcore_plugins.gauges.hydrostatic import layer_errors
+
 try:
     from frames import frames
 except ImportError:
@@ -25,17 +27,14 @@ G = 9.81
 
 
 def layer_profile(pos, p, radius, H, rho0, floor=0.0, up=1):
+    """Rows (y, p_mean, p_min, p_max, p_hydrostatic, rel_err) per particle layer, and dx;
+    the layer means and errors are the ``pressure_gauge`` plugin's (one definition)."""
     dx = 2.0 * float(np.median(radius))
     y = pos[:, up] - floor
+    rows = layer_errors(y, p, dx, H, rho0, G)
     layer = np.floor(y / dx).astype(int)
-    rows = []
-    for k in np.unique(layer):
-        sel = layer == k
-        ym = float(y[sel].mean())
-        ph = rho0 * G * (H - ym)
-        pm = float(p[sel].mean())
-        rows.append((ym, pm, float(p[sel].min()), float(p[sel].max()), ph, (pm - ph) / ph if ph > 0 else np.nan))
-    return np.array(rows), dx
+    spread = np.array([(p[layer == k].min(), p[layer == k].max()) for k in np.unique(layer)])
+    return np.c_[rows[:, 0], rows[:, 1], spread, rows[:, 2], rows[:, 3]], dx
 
 
 def main(argv=None):

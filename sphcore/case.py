@@ -7,7 +7,6 @@ A case is data: TOML is parsed, never executed. Every problem raises
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 

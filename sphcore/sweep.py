@@ -34,7 +34,7 @@ from pathlib import Path
 from . import __version__
 from .case import case_file, read_toml
 from .errors import CaseError, OutputError
-from .sweep_grid import Axis, Variant, expand, fold, parse_set, parse_vary
+from .sweep_grid import Axis, Variant, expand, fold, parse_vary
 from .sweep_results import default_error_key, grid, plot_pareto, table, to_dataset  # noqa: F401 (grid: API)
 from .sweep_task import run_variant, stop_running
 

@@ -1,0 +1,156 @@
+"""The run around the physics, asserted: instability detection, the time step, bit-for-bit
+restart.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+from conftest import by_id, make_sim, run_to_end, write_case
+from core_cases import BLOB, COLLIDING, SPHERES
+
+from sphcore import cli, runner
+
+# ----------------------------------------------------------------------------------------
+# instability
+# ----------------------------------------------------------------------------------------
+
+
+def _message_parts(message):
+    m = re.search(r"unstable at step (\d+), t = (\S+) s: (.*) \(worst particle id (-?\d+)\)", message)
+    assert m, message
+    return int(m.group(1)), float(m.group(2)), m.group(3), int(m.group(4))
+
+
+def test_density_bound_stops_the_run(tmp_path, capsys):
+    case_dir = write_case(tmp_path / "collide", COLLIDING + "\n[checks]\nrho_max = 1.0001\n")
+    summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
+    assert summary["status"] == "unstable"
+    sim = summary["_sim"]
+    step, t, reason, pid = _message_parts(summary["message"])
+    assert step == sim.step >= 1 and t == pytest.approx(sim.t, rel=1e-5) and sim.t < sim.t_end
+    assert "density above the upper bound" in reason
+    # the named particle is the densest one, and it is above the bound
+    worst = int(np.argmax(sim.state.rho))
+    assert pid == int(sim.state.id[worst])
+    assert sim.state.rho[worst] > 1.0001 * 1000.0
+    assert f"{sim.state.rho[worst]:.6g}" in reason
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["status"] == "unstable"
+    # through the CLI: exit status 1, one line on stderr
+    status = cli.main(["run", str(case_dir), "--output", str(tmp_path / "cli"), "--progress", "off"])
+    out, err = capsys.readouterr()
+    assert status == 1
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("sph: error: unstable at step ")
+    assert f"step {step}," in lines[0] and f"id {pid})" in lines[0]
+    assert ": unstable: " in out
+
+
+def test_particle_leaving_the_domain_is_caught(tmp_path):
+    text = SPHERES.format(velocity=[0.0, 0.0], gravity=[0.0, 0.0], t_end=1.0, dt="dt = 0.01",
+                          scheme="leapfrog").replace("min = [-10.0, -10.0]", "min = [0.0, 0.0]")
+    text = text.replace("count = [4, 3]", "count = [1, 1]") + (
+        "\n[[blocks]]\nmin = [0.02, 0.5]\ncount = [1, 1]\nkind = \"sphere\"\nvelocity = [-1.0, 0.0]\n")
+    case_dir = write_case(tmp_path / "leak", text)
+    summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
+    assert summary["status"] == "unstable"
+    step, t, reason, pid = _message_parts(summary["message"])
+    # the centre starts at x = 0.045 m and moves at -1 m/s: it crosses x = 0 during step 5
+    assert step == 5 and t == pytest.approx(0.05)
+    assert pid == 1  # the moving particle (second block), not the one at rest
+    assert "left the domain" in reason
+
+
+def test_particles_spread_far_apart_is_an_instability_at_a_reorder_step(tmp_path):
+    from sphcore.errors import Instability
+
+    sim = make_sim(write_case(tmp_path / "blob", BLOB))
+    sim.state.pos[0] = [4.9, 4.9]  # inside the 10 m box, 5 m from the rest: a grid of ~9000 cells
+    assert sim.step % sim.case.config["neighbours"]["sort_every"] == 0  # the next step reorders
+    with pytest.raises(Instability, match="spread far apart"):
+        sim.advance()
+
+
+# ----------------------------------------------------------------------------------------
+# time step
+# ----------------------------------------------------------------------------------------
+
+
+def test_adaptive_dt_is_acoustic_at_rest(good_case):
+    sim = make_sim(good_case)
+    cfg = sim.case.config["time"]
+    g = 9.81
+    assert sim.c0 == pytest.approx(10.0 * math.sqrt(2.0 * g * 0.2), rel=1e-12)  # H = 10 dx
+    for _ in range(6):
+        vmax = float(np.sqrt(np.max(np.sum(sim.state.vel**2, axis=1))))
+        amax = float(np.sqrt(np.max(np.sum(sim.acc**2, axis=1))))
+        sim.advance()
+        acoustic = cfg["cfl"] * sim.h / (sim.c0 + vmax)
+        assert sim.dt == pytest.approx(acoustic, rel=1e-14)
+        if amax > 0:
+            assert cfg["force_factor"] * math.sqrt(sim.h / amax) > acoustic  # the acoustic limit binds
+    assert sim.step == 6 and np.max(np.abs(sim.state.vel)) > 0  # the block is falling
+    # the Courant number scales the step
+    half = make_sim(good_case, ["time.cfl=0.1"])
+    half.advance()
+    first = make_sim(good_case)
+    first.advance()
+    assert half.dt == pytest.approx(0.5 * first.dt, rel=1e-14)
+
+
+def test_viscous_limit_and_dt_max(good_case):
+    nu = 1.0  # m^2/s: the viscous limit 0.125 h^2 / nu binds
+    sim = make_sim(good_case, [f"fluid.nu={nu}"])
+    sim.advance()
+    assert sim.dt == pytest.approx(0.125 * sim.h**2 / nu, rel=1e-14)
+    capped = make_sim(good_case, ["time.dt_max=1e-5"])
+    capped.advance()
+    assert capped.dt == 1e-5
+
+
+@pytest.mark.parametrize("t_end, n_steps, last", [(0.001, 5, 0.0002), (0.0011, 6, 0.0001)])
+def test_fixed_dt_is_honoured_and_ends_on_t_end(good_case, t_end, n_steps, last):
+    sim = make_sim(good_case, ["time.dt=0.0002", f"time.t_end={t_end}"])
+    dts = run_to_end(sim)
+    assert sim.t == t_end  # exactly, no sliver step
+    assert len(dts) == n_steps
+    assert all(dt == 0.0002 for dt in dts[:-1])
+    assert dts[-1] == pytest.approx(last, rel=1e-9)
+
+
+# ----------------------------------------------------------------------------------------
+# restart
+# ----------------------------------------------------------------------------------------
+
+
+def test_restart_is_bit_for_bit(tmp_path):
+    dt = 2.0**-13  # t = k dt is exact: the interrupted run lands on t1 with full steps
+    t_end, t1 = 40 * dt, 15 * dt
+    text = COLLIDING.replace("t_end = 0.01", f"t_end = {t_end!r}\ndt = {dt!r}") + "\n[fluid]\nnu = 1e-6\n"
+    case_dir = write_case(tmp_path / "case", text)
+    full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
+    part = runner.run(case_dir, output=tmp_path / "part", t_end=t1, quiet=True)
+    assert part["status"] == "completed" and part["_sim"].step == 15 and part["_sim"].t == t1
+    rest = runner.run(case_dir, output=tmp_path / "part", t_end=t_end, restart=True, quiet=True)
+    assert full["status"] == rest["status"] == "completed"
+    a, b = full["_sim"], rest["_sim"]
+    assert a.step == b.step == 40 and a.t == b.t == t_end
+    assert rest["steps"] == 25
+    sa, sb = by_id(a.state), by_id(b.state)
+    for name in sa:
+        assert np.array_equal(sa[name], sb[name]), name
+    ia, ib = np.argsort(a.state.id), np.argsort(b.state.id)
+    assert np.array_equal(a.acc[ia], b.acc[ib]) and np.array_equal(a.drho[ia], b.drho[ib])
+    # the state did evolve: the comparison is not between two copies of the initial state
+    assert not np.array_equal(sa["pos"], by_id(make_sim(case_dir).state)["pos"])
+
+
+def test_restart_without_checkpoint_is_a_case_error(good_case, tmp_path, capsys):
+    status = cli.main(["run", str(good_case), "--output", str(tmp_path / "none"), "--restart"])
+    err = capsys.readouterr().err.strip()
+    assert status == 2
+    assert len(err.splitlines()) == 1 and "--restart" in err and "checkpoint" in err
