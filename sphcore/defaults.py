@@ -107,4 +107,3 @@ PLANE: dict[str, O] = {
     "point": O(None, "vector", "m", "a point on the plane", nullable=True),
 }
 
-KIND_CODES = {"fluid": 0, "sphere": 1, "ghost": 2}

@@ -20,10 +20,10 @@ from .errors import CaseError, Instability
 from .integrators import SCHEMES
 from .kernels import KERNEL_IDS, SUPPORT
 from .neighbours import CellGrid
-from .particles import FLUID, ParticleState, lattice, make_block
+from .particles import FLUID, SPHERE, ParticleState, lattice, make_block
 from .timestep import adaptive_dt, max_norms
 
-KIND_CODES = {"fluid": FLUID, "sphere": 1}
+KIND_CODES = {"fluid": FLUID, "sphere": SPHERE}  # case.toml block kind -> state.kind
 INSIDE_TOL = 1e-9  # relative to the radius: a particle at d = r - ulp still counts as inside
 
 

@@ -65,6 +65,15 @@ def _distance(normals, offsets, k, x, i, dim):
 
 
 @numba.njit(cache=True)
+def _distance_to(normals, offsets, k, a0, a1, a2, dim):
+    """Signed distance of the point (a0, a1, a2) to plane k, same arithmetic as _distance."""
+    d = normals[k, 0] * a0 + normals[k, 1] * a1
+    if dim == 3:
+        d += normals[k, 2] * a2
+    return d - offsets[k]
+
+
+@numba.njit(cache=True)
 def _limit(r):
     """The collision threshold r - tol (m): a plane collides when d < _limit(r)."""
     return r - TOL_REL * r
@@ -86,10 +95,12 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
     """
     n, dim = pos.shape
     nplanes = normals.shape[0]
-    # start of the current sub-segment (C0' after a reflection); one allocation per call
-    start = np.empty_like(pos)
     guarded = 0
     for i in numba.prange(n):
+        # start A of the current sub-segment: C0, then C0' after a reflection (no allocation)
+        a0 = pos0[i, 0]
+        a1 = pos0[i, 1]
+        a2 = pos0[i, 2] if dim == 3 else 0.0
         r = radius[i]
         lim = _limit(r)
         count = 0
@@ -101,11 +112,7 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
             for k in range(nplanes):
                 db = _distance(normals, offsets, k, pos, i, dim)
                 if db < lim:
-                    # the segment starts at C0 until the first reflection, then at C0'
-                    if count == 0:
-                        da = _distance(normals, offsets, k, pos0, i, dim)
-                    else:
-                        da = _distance(normals, offsets, k, start, i, dim)
+                    da = _distance_to(normals, offsets, k, a0, a1, a2, dim)
                     # d_A <= r: touching at the start (rest, C1 = C0, parallel motion): f = 0
                     # otherwise d_A > r > d_B, so the denominator is positive
                     f = 0.0 if da <= r else (da - r) / (da - db)
@@ -122,12 +129,11 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
                 guarded_flags[i] = 1
                 guarded += 1
                 break
-            if count == 0:
-                for j in range(dim):
-                    start[i, j] = pos0[i, j]
             # contact point C0' (Fig. 6): inside every plane, so the invariant holds for A
-            for j in range(dim):
-                start[i, j] += fbest * (pos[i, j] - start[i, j])
+            a0 += fbest * (pos[i, 0] - a0)
+            a1 += fbest * (pos[i, 1] - a1)
+            if dim == 3:
+                a2 += fbest * (pos[i, 2] - a2)
             depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
             u = 0.0
             an = 0.0
