@@ -13,13 +13,16 @@ kernel every particle is checked against every plane (d >= r - 1e-9 r).
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from sphcore_plugins.reflective.collision import outside_mask, reflect
-from sphcore_plugins.reflective.domains import (box, random_directions, random_polytope,
-                                                random_rotation, sample_inside, wedge)
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the test domains
+from domains import (box, random_directions, random_polytope,  # noqa: E402
+                     random_rotation, sample_inside, wedge)
 
 KINDS = ("wedge5-2d", "wedge5-3d", "polytope-2d", "polytope-3d", "box-2d", "box-3d", "wedge-2d", "wedge-3d")
 

@@ -25,11 +25,8 @@ import netCDF4
 import numpy as np
 
 import sphcore
-from sphcore.errors import OutputError
-from sphcore.hookspecs import hookimpl
-from sphcore.particles import FLUID, GHOST, SPHERE
+from sphcore.api import FLUID, GHOST, hookimpl, OutputError, ScheduledWriter, SPHERE
 
-from .writer import ScheduledWriter
 
 TABLE = "netcdf"
 FILE_NAME = "particles.nc"
@@ -111,11 +108,11 @@ class NetcdfWriter(ScheduledWriter):
         self.ids: np.ndarray | None = None  # the file's particle ids (sorted)
 
     @hookimpl
-    def sph_summary(self, sim):
+    def sph_summary(self, ctx):
         return {"netcdf_frames": self.row} if self.row else None
 
     @hookimpl
-    def sph_finish(self, sim):
+    def sph_finish(self, ctx):
         self.close()
 
     # ---------------------------------------------------------------- writing
@@ -143,16 +140,16 @@ class NetcdfWriter(ScheduledWriter):
         self.ds = None
         self._failed = True
 
-    def write_frame(self, sim) -> None:
+    def write_frame(self, ctx) -> None:
         """Append the current state as the next frame and sync it to disk."""
-        if sim.output_dir is None:
+        if ctx.output_dir is None:
             raise OutputError("netcdf: this run has no output directory")
-        st = sim.state
+        st = ctx.state
         order = np.argsort(st.id, kind="stable")
         if self.ds is None:
             if st.n == 0:  # a netCDF dimension of length 0 would be a second unlimited one
-                raise OutputError(f"{Path(sim.output_dir) / FILE_NAME}: no particles to write")
-            self._create(sim, st, order)
+                raise OutputError(f"{Path(ctx.output_dir) / FILE_NAME}: no particles to write")
+            self._create(ctx, st, order)
         ids = st.id[order]
         if not np.array_equal(ids, self.ids):
             raise OutputError(
@@ -164,17 +161,17 @@ class NetcdfWriter(ScheduledWriter):
             self.ds["time"][self.row] = np.nan
             for name, field in STATE_OF.items():
                 self.ds[name][self.row] = getattr(st, field)[order]
-            self.ds["step"][self.row] = int(sim.step)
-            self.ds["time"][self.row] = float(sim.t)  # last: a frame with a time is complete
+            self.ds["step"][self.row] = int(ctx.step)
+            self.ds["time"][self.row] = float(ctx.t)  # last: a frame with a time is complete
             # sync: header and data on disk now, so a killed run keeps this frame
             self.ds.sync()
         except (OSError, RuntimeError) as err:
             self._abandon()
-            raise _fail(self.path, f"write the frame at step {sim.step}", err) from err
+            raise _fail(self.path, f"write the frame at step {ctx.step}", err) from err
         self.row += 1
 
-    def _create(self, sim, st, order) -> None:
-        self.path = Path(sim.output_dir) / FILE_NAME
+    def _create(self, ctx, st, order) -> None:
+        self.path = Path(ctx.output_dir) / FILE_NAME
         try:
             ds = netCDF4.Dataset(self.path, "w", format=FORMAT)
         except (OSError, RuntimeError) as err:
@@ -184,7 +181,7 @@ class NetcdfWriter(ScheduledWriter):
             ds.createDimension("time", None)
             ds.createDimension("particle", st.n)
             ds.createDimension("spatial", st.dim)
-            case = sim.case
+            case = ctx.case
             ds.setncatts({
                 "Conventions": "CF-1.8",
                 "title": f"sphcore particles: {getattr(case, 'name', '')}",
@@ -208,18 +205,18 @@ class NetcdfWriter(ScheduledWriter):
 
     # ---------------------------------------------------------------- restart
 
-    def reopen_for_restart(self, sim) -> None:
-        """Reopen ``particles.nc`` of an earlier run and go on appending; frames up to ``sim.step`` stay.
+    def reopen_for_restart(self, ctx) -> None:
+        """Reopen ``particles.nc`` of an earlier run and go on appending; frames up to ``ctx.step`` stay.
 
-        Called with ``sim`` at the restart point or at the first step after it (the first
-        output of a restarted run). Frames after ``sim.step`` (written after the checkpoint)
+        Called with ``ctx`` at the restart point or at the first step after it (the first
+        output of a restarted run). Frames after ``ctx.step`` (written after the checkpoint)
         are dropped by rewriting the file without them, as a netCDF record dimension cannot
-        shrink; a frame at ``sim.step`` itself holds the same state (checkpoints restart bit
+        shrink; a frame at ``ctx.step`` itself holds the same state (checkpoints restart bit
         for bit) and stays. The particle dimension stays; the schedule counts the kept
         frames as written.
         """
-        path = Path(sim.output_dir or ".") / FILE_NAME
-        if sim.output_dir is None or not path.exists():
+        path = Path(ctx.output_dir or ".") / FILE_NAME
+        if ctx.output_dir is None or not path.exists():
             return  # nothing written before: the first frame creates the file
         try:
             with netCDF4.Dataset(path) as src:
@@ -227,7 +224,7 @@ class NetcdfWriter(ScheduledWriter):
                 steps, times = src["step"][:], src["time"][:]
             # frames to keep: the leading ones up to the restart step (a NaN time marks
             # a frame left incomplete by a failed write)
-            ok = np.isfinite(times) & (steps <= sim.step)
+            ok = np.isfinite(times) & (steps <= ctx.step)
             keep = len(ok) if ok.all() else int(np.argmin(ok))
             if keep < len(steps):
                 _rewrite_first(path, keep)
@@ -239,7 +236,7 @@ class NetcdfWriter(ScheduledWriter):
         self.ds, self.path, self.row, self.ids = ds, path, keep, ids
         if keep:
             t_last = float(times[keep - 1])
-            self.schedule.resume(t_last, int(steps[keep - 1]) if steps[keep - 1] == sim.step else None)
+            self.schedule.resume(t_last, int(steps[keep - 1]) if steps[keep - 1] == ctx.step else None)
 
 
 def _rewrite_first(path: Path, keep: int) -> None:

@@ -1,6 +1,6 @@
 """VTU output for ParaView: one ``.vtu`` per frame and one ``.pvd`` collection per run.
 
-Layout below ``sim.output_dir``::
+Layout below ``ctx.output_dir``::
 
     <name>.pvd              the collection: every frame with its simulated time (s)
     vtu/<name>_000000.vtu   one unstructured grid of vertex cells per frame
@@ -22,17 +22,15 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from sphcore.errors import OutputError
-from sphcore.hookspecs import hookimpl
+from sphcore.api import hookimpl, OutputError, ScheduledWriter
 
-from .writer import ScheduledWriter
 
 TABLE = "vtu"
 
 
-def run_name(sim) -> str:
+def run_name(ctx) -> str:
     """A file-name-safe label for the run: the case name, or "particles" when empty."""
-    name = str(getattr(sim.case, "name", "") or "")
+    name = str(getattr(ctx.case, "name", "") or "")
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "particles"
 
 
@@ -109,59 +107,59 @@ class VtuWriter(ScheduledWriter):
         self.frames: list[tuple[float, str]] = []  # (t in s, file relative to output_dir)
 
     @hookimpl
-    def sph_summary(self, sim):
+    def sph_summary(self, ctx):
         return {"vtu_frames": len(self.frames)} if self.frames else None
 
     @hookimpl
-    def sph_finish(self, sim):
+    def sph_finish(self, ctx):
         pass  # every file is complete and closed once its frame is written
 
     # ---------------------------------------------------------------- writing
 
-    def pvd_path(self, sim) -> Path:
-        return Path(sim.output_dir) / f"{run_name(sim)}.pvd"
+    def pvd_path(self, ctx) -> Path:
+        return Path(ctx.output_dir) / f"{run_name(ctx)}.pvd"
 
-    def write_frame(self, sim) -> Path:
+    def write_frame(self, ctx) -> Path:
         """Write the current state as the next frame and rewrite the collection; returns the .vtu."""
-        if sim.output_dir is None:
+        if ctx.output_dir is None:
             raise OutputError("vtu: this run has no output directory")
-        out = Path(sim.output_dir)
-        name = run_name(sim)
+        out = Path(ctx.output_dir)
+        name = run_name(ctx)
         rel = f"vtu/{name}_{len(self.frames):06d}.vtu"
         path = out / rel
         try:
             path.parent.mkdir(exist_ok=True)
         except OSError as err:
             raise OutputError(f"{path.parent}: cannot create directory: {err.strerror or err}") from err
-        mesh = frame_mesh(sim.state)
+        mesh = frame_mesh(ctx.state)
         # binary: base64 of the raw float64 bytes, so the file holds exact values
         replace_atomically(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu", binary=True))
-        self.frames.append((float(sim.t), rel))
+        self.frames.append((float(ctx.t), rel))
         text = pvd_text(self.frames)
-        replace_atomically(self.pvd_path(sim), lambda tmp: tmp.write_text(text))
+        replace_atomically(self.pvd_path(ctx), lambda tmp: tmp.write_text(text))
         return path
 
-    def reopen_for_restart(self, sim) -> None:
-        """Continue the collection of an earlier run; frames up to ``sim.t`` are kept.
+    def reopen_for_restart(self, ctx) -> None:
+        """Continue the collection of an earlier run; frames up to ``ctx.t`` are kept.
 
-        Called with ``sim`` at the restart point or at the first step after it (the first
-        output of a restarted run). Frames later than ``sim.t`` (written after the
+        Called with ``ctx`` at the restart point or at the first step after it (the first
+        output of a restarted run). Frames later than ``ctx.t`` (written after the
         checkpoint) are dropped from the collection and their files removed; a frame at
-        ``sim.t`` itself holds the same state (checkpoints restart bit for bit) and stays.
+        ``ctx.t`` itself holds the same state (checkpoints restart bit for bit) and stays.
         Numbering goes on after the frames kept; the schedule counts them as written.
         """
-        if sim.output_dir is None or not self.pvd_path(sim).exists():
+        if ctx.output_dir is None or not self.pvd_path(ctx).exists():
             return  # nothing written before: numbering starts at 0
-        pvd = self.pvd_path(sim)
+        pvd = self.pvd_path(ctx)
         try:
             frames = read_pvd(pvd)
         except (OSError, ET.ParseError) as err:
             raise OutputError(f"{pvd}: cannot read the collection to restart: {err}") from err
         # exact comparison: both times are the same float64 (repr round-trips)
-        keep = [f for f in frames if f[0] <= sim.t]
-        frame_dir = (Path(sim.output_dir) / "vtu").resolve()
-        for _, rel in (f for f in frames if f[0] > sim.t):
-            stale = (Path(sim.output_dir) / rel).resolve()
+        keep = [f for f in frames if f[0] <= ctx.t]
+        frame_dir = (Path(ctx.output_dir) / "vtu").resolve()
+        for _, rel in (f for f in frames if f[0] > ctx.t):
+            stale = (Path(ctx.output_dir) / rel).resolve()
             if stale.parent != frame_dir:
                 continue  # not a frame of ours (an edited collection): never delete it
             try:
@@ -172,4 +170,4 @@ class VtuWriter(ScheduledWriter):
         replace_atomically(pvd, lambda tmp: tmp.write_text(pvd_text(keep)))
         if keep:
             t_last = keep[-1][0]
-            self.schedule.resume(t_last, sim.step if t_last == sim.t else None)
+            self.schedule.resume(t_last, ctx.step if t_last == ctx.t else None)

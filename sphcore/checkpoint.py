@@ -22,12 +22,22 @@ NAME = "checkpoint.npz"
 def save(sim, directory: Path) -> Path:
     path = Path(directory) / NAME
     tmp = path.with_suffix(".tmp.npz")
-    arrays = {f"state_{name}": a for name, a in sim.state.arrays()}
-    arrays["acc"] = sim.acc
-    if sim.drho is not None:
-        arrays["drho"] = sim.drho
-    meta = {"t": sim.t, "step": sim.step, "dt": sim.dt, "stats": sim.stats,
-            "counters": dict(sim.counters), "fresh": bool(sim.integrator.fresh),
+    ctx = sim.ctx
+    arrays = {f"state_{name}": a for name, a in ctx.state.arrays()}
+    rates = sim.integrator.checkpoint()
+    arrays["acc"] = rates["acc"]
+    arrays["drho"] = rates["drho"]
+    kept = {}
+    for plugin, values in ctx._kept.items():
+        kept[plugin] = {}
+        for key, value in values.items():
+            if isinstance(value, np.ndarray):
+                arrays[f"kept_{plugin}_{key}"] = value
+                kept[plugin][key] = {"__array__": f"kept_{plugin}_{key}"}
+            else:
+                kept[plugin][key] = value
+    meta = {"t": ctx.t, "step": ctx.step, "dt": ctx.dt, "stats": ctx._stats, "kept": kept,
+            "counters": dict(ctx.counters), "fresh": bool(rates["fresh"]),
             "config": json.dumps(sim.case.config, default=str, sort_keys=True)}
     try:
         with open(tmp, "wb") as f:
@@ -51,19 +61,21 @@ def read(directory: Path) -> tuple[dict, dict]:
     return meta, arrays
 
 
-def restore_state(sim, meta: dict, arrays: dict) -> None:
-    """Put the checkpoint's particles, clock and statistics into ``sim`` (before set-up)."""
-    names = [name for name, _ in sim.state.arrays()]
-    sim.state = ParticleState(**{name: arrays[f"state_{name}"] for name in names})
-    sim.t, sim.step, sim.dt = meta["t"], meta["step"], meta["dt"]
-    sim.stats.update(meta["stats"])
-    sim.counters.update(meta["counters"])
+def restore_state(ctx, meta: dict, arrays: dict) -> None:
+    """Put the checkpoint's particles, clock, statistics and the plugins' kept state into
+    the run context ``ctx`` (before set-up)."""
+    names = [name for name, _ in ctx.state.arrays()]
+    ctx.state = ParticleState(**{name: arrays[f"state_{name}"] for name in names})
+    ctx.t, ctx.step, ctx.dt = meta["t"], meta["step"], meta["dt"]
+    for plugin, values in meta["stats"].items():
+        ctx.stats(plugin).update(values)
+    for plugin, values in meta.get("kept", {}).items():
+        ctx.kept(plugin).update({k: arrays[v["__array__"]] if isinstance(v, dict) and "__array__" in v else v
+                                 for k, v in values.items()})
+    ctx.counters.update(meta["counters"])
 
 
 def restore_rates(sim, meta: dict, arrays: dict) -> None:
-    """Put the checkpoint's rates into ``sim``'s work arrays (after allocation), so the
-    leapfrog continues exactly as the uninterrupted run would."""
-    sim.acc[:] = arrays["acc"]
-    if sim.drho is not None and "drho" in arrays:
-        sim.drho[:] = arrays["drho"]
-    sim.integrator.fresh = meta["fresh"]
+    """Put the checkpoint's rates into the integrator (after allocation), so the leapfrog
+    continues exactly as the uninterrupted run would."""
+    sim.integrator.restore({"acc": arrays["acc"], "drho": arrays.get("drho", np.zeros(0)), "fresh": meta["fresh"]})

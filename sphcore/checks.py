@@ -8,6 +8,9 @@ import math
 
 from numba import njit
 
+from .eos import internal_energy, tait_b
+from .geometry import particle_distance
+
 OK, NONFINITE, RHO_LOW, RHO_HIGH, OUTSIDE = 0, 1, 2, 3, 4
 REASONS = {
     NONFINITE: "non-finite position, velocity or density",
@@ -36,9 +39,7 @@ def scan(pos, vel, rho, rho_lo, rho_hi, check_rho, normals, offsets):
             if rho[i] > worst_hi:
                 worst_hi, i_hi = rho[i], i
         for k in range(normals.shape[0]):
-            dist = -offsets[k]
-            for d in range(dim):
-                dist += normals[k, d] * pos[i, d]
+            dist = particle_distance(normals, offsets, k, pos, i)
             if dist < worst_out:
                 worst_out, i_out = dist, i
     if i_out >= 0:
@@ -54,13 +55,10 @@ def scan(pos, vel, rho, rho_lo, rho_hi, check_rho, normals, offsets):
 def total_energy(pos, vel, rho, m, gravity, rho0, c0, gamma, with_internal):
     """Kinetic + potential + Tait internal energy (J, or J/m in 2D).
 
-    The internal energy per unit mass of the Tait fluid, u(rho) = int p / rho^2 d rho,
-    relative to u(rho0): B (rho^(gamma-1) / (rho0^gamma (gamma-1)) + 1/rho) - (same at rho0),
-    B = c0^2 rho0 / gamma.
+    The internal energy per unit mass is the Tait fluid's (:func:`sphcore.eos.internal_energy`).
     """
     n, dim = pos.shape
-    b = c0 * c0 * rho0 / gamma
-    u0 = b * (rho0 ** (gamma - 1.0) / (rho0 ** gamma * (gamma - 1.0)) + 1.0 / rho0)
+    b = tait_b(c0, rho0, gamma)
     e = 0.0
     for i in range(n):
         k = 0.0
@@ -70,6 +68,6 @@ def total_energy(pos, vel, rho, m, gravity, rho0, c0, gamma, with_internal):
             pe -= gravity[d] * pos[i, d]
         u = 0.0
         if with_internal:
-            u = b * (rho[i] ** (gamma - 1.0) / (rho0 ** gamma * (gamma - 1.0)) + 1.0 / rho[i]) - u0
+            u = internal_energy(rho[i], rho0, b, gamma)
         e += m[i] * (0.5 * k + pe + u)
     return e

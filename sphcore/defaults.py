@@ -58,6 +58,8 @@ CORE: dict[str, dict[str, O]] = {
     },
     "density_diffusion": {
         "delta": O(0.0, "float", doc="Molteni & Colagrossi (2009) density diffusion coefficient; 0 is off", min=0.0),
+        "hydrostatic": O(False, "bool", doc="diffuse only the departure from the hydrostatic density "
+                         "stratification (Fourtakas et al. 2019), so that water at rest is not disturbed"),
     },
     "integrator": {
         "scheme": O("leapfrog", "str", doc="time integration", choices=("leapfrog", "euler")),

@@ -6,66 +6,104 @@ v_ij = v_i - v_j, grad_i W_ij = F_ij x_ij (see :mod:`sphcore.kernels`):
 
 - continuity (Monaghan 1992, Eq. 2.9 form): drho_i/dt = sum_j m_j v_ij . grad_i W_ij
 - density diffusion (Molteni & Colagrossi 2009):
-  + delta h c0 sum_j 2 (rho_i - rho_j) (m_j / rho_j) (x_ij . grad_i W_ij) / (|x_ij|^2 + eta^2)
+  + delta h c0 sum_j 2 psi_ij (m_j / rho_j) (x_ij . grad_i W_ij) / (|x_ij|^2 + eta^2),
+  psi_ij = rho_i - rho_j, or with ``diffusion_hydrostatic`` its departure from the
+  hydrostatic stratification (Fourtakas et al. 2019): psi_ij = rho_i - rho_j - (rho0/c0^2) g . x_ij
+  (the linearised hydrostatic density difference rho^H_i - rho^H_j), so water at rest is not diffused
 - momentum (Monaghan 1994): dv_i/dt = g - sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad_i W_ij
 - artificial viscosity (Monaghan 1992): for v_ij . x_ij < 0,
   mu_ij = h v_ij . x_ij / (|x_ij|^2 + eta^2), Pi_ij = (-alpha c0 mu_ij + beta mu_ij^2) / rho_bar
 - laminar viscosity (Morris et al. 1997, Lo & Shao 2002 form):
   + sum_j m_j 4 nu / (rho_i + rho_j) (x_ij . grad_i W_ij) / (|x_ij|^2 + eta^2) v_ij
-- Tait equation of state (Monaghan 1994; Batchelor 1967): p = B ((rho/rho0)^gamma - 1) + p_b,
-  B = c0^2 rho0 / gamma
+- boundary-integral walls (:class:`WallTerms`; Kulasegaram et al. 2004, Ferrand et al. 2013):
+  where a plugin supplies the wall share s_i of the kernel support, its gradient G_i and the
+  hydrostatic moment H_i, the sums are completed by the wall and renormalised by the fluid
+  share gamma_i = 1 - s_i:
+      drho_i/dt = (sum_j ... + rho_i v_i . G_i) / gamma_i
+      dv_i/dt   = g - (sum_j ... + 2 (p_i/rho_i) G_i + ((rho_i - rho_ref)/rho_i) H_i) / gamma_i
+  i.e. the wall carries the pressure p_i extrapolated hydrostatically to it (Ferrand's
+  p_s), which makes a fluid at rest hydrostatic in the continuum limit for any wall shape.
+- Tait equation of state: :mod:`sphcore.eos`.
 
-eta^2 = 0.01 h^2 keeps the denominators finite.
+eta^2 = 0.01 h^2 keeps the denominators finite. Arguments are structured: ``src``
+(:class:`Fields`), ``grid`` (:class:`sphcore.neighbours.Grid`), ``prm``
+(:class:`sphcore.params.Params`), ``wall`` (:class:`WallTerms`).
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
 from .kernels import kernel_f, kernel_w
-from .neighbours import cell_coords, neighbour_cell
+from .neighbours import cell_of, cell_range
 
 
-@njit(cache=True)
-def tait_pressure(rho, rho0, c0, gamma, p_background, p):
-    """Fill p (Pa) from rho (kg/m^3) with the Tait equation of state."""
-    b = c0 * c0 * rho0 / gamma
-    for i in range(rho.shape[0]):  # element-wise: serial (see integrators._drift)
-        p[i] = b * ((rho[i] / rho0) ** gamma - 1.0) + p_background
+class Fields(NamedTuple):
+    """Source particles of one force evaluation: the fluid first, then plugin sources.
+    pos, vel (n, dim) m and m/s; rho (kg/m^3), p (Pa, the pressure the momentum equation
+    uses), m (kg): (n,)."""
+
+    pos: np.ndarray
+    vel: np.ndarray
+    rho: np.ndarray
+    p: np.ndarray
+    m: np.ndarray
+
+
+class WallTerms(NamedTuple):
+    """Per-particle boundary-integral terms of the walls (zero far from walls).
+
+    ``share`` (n,): the wall's share s of the particle's kernel support, int_outside W;
+    ``grad`` (n, dim): G = grad s (1/m), pointing towards the wall;
+    ``hydro`` (n, dim): H = oint_wall W n_out g . (x_s - x) dS (m/s^2), the hydrostatic
+    moment of the wall pressure; ``active``: false when no plugin supplies them (skipped).
+    Plugins fill them in the ``sph_wall_terms`` hook; terms of several plugins add up.
+    """
+
+    share: np.ndarray
+    grad: np.ndarray
+    hydro: np.ndarray
+    active: bool
 
 
 @njit(cache=True, parallel=True)
-def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, ncell,
-              kernel_id, h, c0, alpha, beta, nu, delta, gravity, buoyancy, rho0, use_L, L, acc, drho):
+def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
     """Accelerations acc (n_dest, dim) in m/s^2 and density rates drho (n_dest,) in kg/m^3/s.
 
     Terms whose coefficient is zero are skipped, so a case without viscosity or density
-    diffusion computes none. ``buoyancy``: gravity acts as g (1 - rho0/rho_i) (modified
-    pressure, Batchelor 1967). ``use_L``: the kernel gradient is corrected with the
+    diffusion computes none. ``prm.modified_pressure``: gravity acts as g (1 - rho0/rho_i)
+    (Batchelor 1967). ``prm.kernel_gradient``: the kernel gradient is corrected with the
     symmetrised Bonet & Lok matrix (L_i + L_j)/2 (antisymmetric in i, j, so momentum is
-    still conserved); sources beyond ``L.shape[0]`` use the identity.
+    still conserved); sources beyond ``L.shape[0]`` use the identity. ``wall``: see the
+    module docstring.
     """
+    pos, vel, rho, p, m = src
     dim = pos.shape[1]
-    eta2 = 0.01 * h * h
-    r2max = (2.0 * h) ** 2
+    h, c0 = prm.h, prm.c0
+    alpha, beta, nu, delta, eta2 = prm.alpha, prm.beta, prm.nu, prm.delta, prm.eta2
+    gravity = prm.gravity
+    r2max = prm.support * prm.support
     do_av = alpha > 0.0 or beta > 0.0
     do_lam = nu > 0.0
     do_diff = delta > 0.0
+    # linearised hydrostatic density gradient rho0 / c0^2 (s^2/m^2 * kg/m^3)
+    diff_h = prm.rho0 / (c0 * c0) if (do_diff and prm.diffusion_hydrostatic) else 0.0
+    use_L = prm.kernel_gradient
     n_L = L.shape[0] if use_L else 0
     for i in prange(n_dest):
-        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
+        cx, cy, cz = cell_of(grid, pos, i)
         a0 = 0.0
         a1 = 0.0
         a2 = 0.0
         dr = 0.0
         pi_r = p[i] / (rho[i] * rho[i])
         for q in range(3 ** dim):
-            c = neighbour_cell(cx, cy, cz, q, ncell, dim)
-            if c < 0:
-                continue
-            for k in range(cell_start[c], cell_start[c + 1]):
-                j = order[k]
+            k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
+            for k in range(k0, k1):
+                j = grid.order[k]
                 if j == i:
                     continue
                 x0 = pos[i, 0] - pos[j, 0]
@@ -74,7 +112,7 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
                 r2 = x0 * x0 + x1 * x1 + x2 * x2
                 if r2 >= r2max:
                     continue
-                f = kernel_f(kernel_id, np.sqrt(r2), h, dim)
+                f = kernel_f(prm.kernel_id, np.sqrt(r2), h, dim)
                 g0 = f * x0
                 g1 = f * x1
                 g2 = f * x2
@@ -88,7 +126,10 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
                 mj = m[j]
                 dr += mj * (v0 * g0 + v1 * g1 + v2 * g2)
                 if do_diff:
-                    dr += delta * h * c0 * 2.0 * (rho[i] - rho[j]) * mj / rho[j] * xg / (r2 + eta2)
+                    psi = rho[i] - rho[j]
+                    if diff_h != 0.0:
+                        psi -= diff_h * (gravity[0] * x0 + gravity[1] * x1 + gravity[2] * x2)
+                    dr += delta * h * c0 * 2.0 * psi * mj / rho[j] * xg / (r2 + eta2)
                 s = pi_r + p[j] / (rho[j] * rho[j])
                 if do_av and vx < 0.0:
                     mu = h * vx / (r2 + eta2)
@@ -101,12 +142,38 @@ def sph_rates(n_dest, pos, vel, rho, p, m, order, cell_start, lo, cell_size, nce
                     a0 += lam * v0
                     a1 += lam * v1
                     a2 += lam * v2
-        gscale = 1.0 - rho0 / rho[i] if buoyancy else 1.0
+        if wall.active and wall.share[i] > 0.0:
+            a0, a1, a2, dr = _complete_at_wall(wall, i, dim, vel, rho[i], p[i], prm.rho_ref, a0, a1, a2, dr)
+        gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
         acc[i, 0] = gscale * gravity[0] + a0
         acc[i, 1] = gscale * gravity[1] + a1
         if dim == 3:
             acc[i, 2] = gscale * gravity[2] + a2
         drho[i] = dr
+
+
+@njit(cache=True, inline="always")
+def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, a0, a1, a2, dr):
+    """Add the wall's boundary integrals to particle i's sums and renormalise by the fluid
+    share (module docstring; Ferrand et al. 2013 Eqs. 20 and 27 with the wall pressure
+    extrapolated hydrostatically from the particle)."""
+    g0 = wall.grad[i, 0]
+    g1 = wall.grad[i, 1]
+    g2 = wall.grad[i, 2] if dim == 3 else 0.0
+    h0 = wall.hydro[i, 0]
+    h1 = wall.hydro[i, 1]
+    h2 = wall.hydro[i, 2] if dim == 3 else 0.0
+    inv = 1.0 / (1.0 - wall.share[i])
+    cp = 2.0 * p_i / rho_i
+    ch = (rho_i - rho_ref) / rho_i
+    a0 = (a0 - cp * g0 - ch * h0) * inv
+    a1 = (a1 - cp * g1 - ch * h1) * inv
+    a2 = (a2 - cp * g2 - ch * h2) * inv
+    vg = vel[i, 0] * g0 + vel[i, 1] * g1
+    if dim == 3:
+        vg += vel[i, 2] * g2
+    dr = (dr + rho_i * vg) * inv
+    return a0, a1, a2, dr
 
 
 @njit(cache=True)
@@ -129,8 +196,7 @@ def _apply(L, n_L, row, g0, g1, g2):
 
 
 @njit(cache=True, parallel=True)
-def neighbour_sums(n_dest, pos, rho, m, order, cell_start, lo, cell_size, ncell, kernel_id, h,
-                   want_L, L, want_shepard, shepard):
+def neighbour_sums(n_dest, src, grid, prm, want_L, L, want_shepard, shepard):
     """Per-particle kernel sums over the neighbours (self included where it contributes).
 
     - L (n_dest, 3, 3): the Bonet & Lok (1999) correction matrix
@@ -138,10 +204,12 @@ def neighbour_sums(n_dest, pos, rho, m, order, cell_start, lo, cell_size, ncell,
     - shepard (n_dest,): the Shepard-filtered density
       rho_i = sum_j m_j W_ij / sum_j V_j W_ij (Chen et al. 1999, CSPH zeroth order).
     """
+    pos, rho, m = src.pos, src.rho, src.m
     dim = pos.shape[1]
-    r2max = (2.0 * h) ** 2
+    h, kernel_id = prm.h, prm.kernel_id
+    r2max = prm.support * prm.support
     for i in prange(n_dest):
-        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
+        cx, cy, cz = cell_of(grid, pos, i)
         if want_L:
             for a in range(3):
                 for b in range(3):
@@ -149,11 +217,9 @@ def neighbour_sums(n_dest, pos, rho, m, order, cell_start, lo, cell_size, ncell,
         num = 0.0
         den = 0.0
         for q in range(3 ** dim):
-            c = neighbour_cell(cx, cy, cz, q, ncell, dim)
-            if c < 0:
-                continue
-            for k in range(cell_start[c], cell_start[c + 1]):
-                j = order[k]
+            k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
+            for k in range(k0, k1):
+                j = grid.order[k]
                 x0 = pos[i, 0] - pos[j, 0]
                 x1 = pos[i, 1] - pos[j, 1]
                 x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0

@@ -10,6 +10,24 @@ from dataclasses import dataclass
 from itertools import combinations
 
 import numpy as np
+from numba import njit
+
+
+@njit(cache=True, inline="always")
+def plane_distance(normals, offsets, k, x0, x1, x2):
+    """Signed distance d = n_k . x - offset_k (m) of the point (x0, x1, x2) to plane k
+    (paper Eq. 4), positive inside; x2 is ignored in 2D. The one definition every kernel
+    uses (walls, checks, ghosts, free surface), so all of them agree to the last bit."""
+    d = normals[k, 0] * x0 + normals[k, 1] * x1
+    if normals.shape[1] == 3:
+        d += normals[k, 2] * x2
+    return d - offsets[k]
+
+
+@njit(cache=True, inline="always")
+def particle_distance(normals, offsets, k, pos, i):
+    """:func:`plane_distance` of particle i of ``pos`` (n, dim)."""
+    return plane_distance(normals, offsets, k, pos[i, 0], pos[i, 1], pos[i, 2] if pos.shape[1] == 3 else 0.0)
 
 
 @dataclass(frozen=True)

@@ -6,12 +6,14 @@ between kernel calls, once per run, step or stage: never once per particle. A ho
 implementation whose name is not specified here is an error at start-up.
 
 Arguments are passed by keyword; an implementation may accept any subset of them.
-``sim`` is the :class:`sphcore.simulation.Simulation`: ``sim.state`` (struct-of-arrays
-particles), ``sim.case`` (validated configuration), ``sim.t``, ``sim.step``, ``sim.dt``,
-``sim.stats`` (a dict of counters that ends up in the run summary), ``sim.output_dir``
-(a pathlib.Path, or None when the simulation runs without an output directory),
-``sim.restarting`` (True when the run continues from a checkpoint: at ``sph_setup`` the
-particles, ``t`` and ``step`` are already those of the checkpoint).
+``ctx`` is the run context, :class:`sphcore.context.RunContext`; its docstring lists every
+attribute: ``ctx.state`` (particles), ``ctx.params`` (constants), ``ctx.walls`` (wall
+planes), ``ctx.case`` (validated configuration), the clock ``ctx.t``, ``ctx.step``,
+``ctx.dt``, ``ctx.t_end``, ``ctx.output_dir``, ``ctx.restarting``,
+``ctx.force_pressure``, ``ctx.acc``, ``ctx.counters``, and the plugin's own namespaces
+``ctx.stats(self)`` (figures merged into summary.json under the plugin's name, kept across
+restarts) and ``ctx.kept(self)`` (state kept across restarts). Everything a plugin needs
+to import is in :mod:`sphcore.api`.
 """
 
 from __future__ import annotations
@@ -50,11 +52,11 @@ def sph_configure(case):
 
 
 @hookspec
-def sph_setup(sim):
+def sph_setup(ctx):
     """Prepare for the run with the initial particles in place.
 
     Fires once after the particles are built and before the first force computation.
-    May add particles (``sim.state.append``), allocate work arrays, and check the initial
+    May add particles (``ctx.state.append``), allocate work arrays, and check the initial
     state against its own geometry (raise CaseError, e.g. a particle outside a wall).
     """
 
@@ -65,18 +67,18 @@ def sph_setup(sim):
 
 
 @hookspec
-def sph_before_forces(sim):
+def sph_before_forces(ctx):
     """Adjust the fields that feed a force evaluation.
 
     Fires at the start of every force evaluation, after the equation of state and before
-    extra sources and the neighbour search. May change ``sim.state.p`` and ``sim.state.rho``
+    extra sources and the neighbour search. May change ``ctx.force_pressure`` and ``ctx.state.rho``
     (e.g. hold free-surface particles at zero pressure, filter the density); must not move
     particles.
     """
 
 
 @hookspec
-def sph_extra_sources(sim):
+def sph_extra_sources(ctx):
     """Return extra *source* particles for this force evaluation, or None.
 
     Fires before the neighbour search of every force evaluation. The result is a
@@ -87,10 +89,37 @@ def sph_extra_sources(sim):
 
 
 @hookspec
-def sph_accelerations(sim, acc):
+def sph_wall_terms(ctx, terms):
+    """Add this plugin's walls to the per-particle boundary-integral terms, in place.
+
+    Fires in every force evaluation after the neighbour search, before the pair sums, and
+    only when some plugin implements it. ``terms`` is a
+    :class:`sphcore.equations.WallTerms` of arrays zeroed by the core: ``terms.share`` (n,)
+    the wall's share of each particle's kernel support, ``terms.grad`` (n, dim) its
+    gradient (1/m, towards the wall), ``terms.hydro`` (n, dim) the hydrostatic moment of the
+    wall pressure (m/s^2). Add (``+=``) what your walls contribute, so that several wall
+    plugins combine. The core then completes the continuity and momentum sums with them
+    and renormalises by the fluid share (see :mod:`sphcore.equations`).
+    """
+
+
+@hookspec
+def sph_accelerations(ctx, acc):
     """Add accelerations to ``acc`` (shape (n, dim), m/s^2) in place.
 
     Fires after the core rates (pressure, viscosity, gravity) of every force evaluation.
+    Accelerations may do work on the fluid: unless the plugin also implements
+    ``sph_energy``, the core's energy-growth check is switched off and the summary says why.
+    """
+
+
+@hookspec
+def sph_energy(ctx):
+    """Return the energy (J, J/m in 2D) this plugin's forces store, or None.
+
+    Fires whenever the core checks total energy. A plugin whose accelerations are
+    conservative (a potential) returns its potential energy; the core's energy-growth
+    check then stays on.
     """
 
 
@@ -100,7 +129,7 @@ def sph_accelerations(sim, acc):
 
 
 @hookspec
-def sph_after_integrate(sim, pos0, pos, vel, acc, dt):
+def sph_after_integrate(ctx, pos0, pos, vel, acc, dt):
     """Correct positions and velocities after the free-motion update of a step.
 
     Fires once per step, right after the integrator moved every particle from ``pos0``
@@ -114,17 +143,17 @@ def sph_after_integrate(sim, pos0, pos, vel, acc, dt):
 
 
 @hookspec
-def sph_after_step(sim):
+def sph_after_step(ctx):
     """Inspect the state after a complete step: checks, counters, diagnostics.
 
     Fires once per step after the core checks. May raise
-    :class:`sphcore.errors.Instability` to stop the run; may update ``sim.stats``.
+    :class:`sphcore.errors.Instability` to stop the run; may update ``ctx.stats(self)``.
     Must not change particle data.
     """
 
 
 @hookspec
-def sph_max_dt(sim):
+def sph_max_dt(ctx):
     """Return an upper bound on the next time step (s), or None for no limit.
 
     Fires once per step before the step size is chosen; the smallest bound wins.
@@ -137,26 +166,27 @@ def sph_max_dt(sim):
 
 
 @hookspec
-def sph_output(sim, final):
+def sph_output(ctx, final):
     """Write output if this writer's schedule says so.
 
-    Fires after the set-up (``sim.step == 0``, unless the run restarts from a checkpoint),
+    Fires after the set-up (``ctx.step == 0``, unless the run restarts from a checkpoint),
     after every step, and once more with ``final=True`` when the run reaches its end or is
     stopped by a signal. After an instability it does not fire again, so the files keep the
     last good frame. Each writer owns its schedule, files and directory layout below
-    ``sim.output_dir``; ``sim.restarting`` tells it to append to what is there. Must not
-    change particle data.
+    ``ctx.output_dir``; ``ctx.restarting`` tells it to append to what is there. Must not
+    change particle data. :class:`sphcore.api.ScheduledWriter` does the bookkeeping.
     """
 
 
 @hookspec
-def sph_summary(sim):
-    """Return a dict of figures to merge into the run summary, or None.
+def sph_summary(ctx):
+    """Return a dict of figures for the run summary, or None.
 
-    Fires once at the end of the run, before ``sph_finish``.
+    Fires once at the end of the run, before ``sph_finish``. The figures are merged with
+    ``ctx.stats(self)`` and written to summary.json under the plugin's name.
     """
 
 
 @hookspec
-def sph_finish(sim):
+def sph_finish(ctx):
     """Release resources (close files). Fires once at the end of every run, also a failed one."""

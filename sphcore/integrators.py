@@ -20,6 +20,7 @@ hook (where the reflective boundary corrects positions and velocities), then rat
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 
@@ -57,30 +58,80 @@ def _correct(vel, acc_new, acc_old, half_dt):
 
 
 class _Scheme:
-    """What both schemes share: rates of the current state (computed once, reused while
-    ``fresh``) and the free-motion stage that ends in the boundary hook."""
+    """What both schemes share: the rates of the current state (``acc``, ``drho``, computed
+    once and reused while ``fresh``), the scratch arrays, and the free-motion stage that
+    ends in the boundary correction.
+
+    A scheme is built with the particles, the force evaluation (``forces.evaluate(acc,
+    drho)``), ``after_drift(pos0, pos, vel, acc, dt)`` (the walls) and ``eos()`` (pressure
+    from density); it calls nothing else.
+    """
 
     name = ""
     half_kick = 0.0  # weight of dt/2 * a in the drift: 0 for Euler, 1 for the leapfrog
 
-    def __init__(self):
-        self.fresh = False  # are sim.acc/drho the rates of the current state?
+    def __init__(self, state, forces, after_drift, eos, evolves_density: bool):
+        self.state, self.forces, self.after_drift, self.eos = state, forces, after_drift, eos
+        self.evolves_density = evolves_density
+        self.fresh = False  # are acc/drho the rates of the current state?
+        self.acc = np.zeros((0, state.dim))
+        self.drho = np.zeros(0)
+        self.pos0 = np.zeros((0, state.dim))
+        self.resize()
+
+    # -- arrays -----------------------------------------------------------------------
+
+    def resize(self):
+        """(Re)allocate the per-particle arrays when the particle count changed (set-up)."""
+        n, dim = self.state.n, self.state.dim
+        if self.acc.shape[0] != n:
+            self.acc = np.zeros((n, dim))
+            self.drho = np.zeros(n)
+            self.pos0 = np.zeros((n, dim))
+            self._extra_arrays(n, dim)
+            self.fresh = False
+
+    def _extra_arrays(self, n, dim):
+        pass
+
+    def permute(self, order):
+        """Follow a reordering of the particles (the rates move with them)."""
+        self.acc[:] = self.acc[order]
+        self.drho[:] = self.drho[order]
 
     def invalidate(self):
-        """The state changed outside a step (restart, density filter): recompute rates first."""
+        """The state changed outside a step (density filter): recompute rates first."""
         self.fresh = False
 
-    def free_motion(self, sim, dt):
-        """x += dt (v + half_kick dt/2 a), v += dt a, rho += dt D; then walls and EOS."""
-        st = sim.state
+    def rates(self):
+        """Make ``acc``/``drho`` the rates of the current state."""
         if not self.fresh:
-            sim.compute_rates()
-        _drift(sim.pos0, st.pos, st.vel, sim.acc, dt, self.half_kick)
-        _kick(st.vel, sim.acc, dt)
-        if sim.evolves_density:
-            _kick(st.rho.reshape(-1, 1), sim.drho.reshape(-1, 1), dt)
-        sim.after_integrate(dt)
-        sim.update_pressure()
+            self.forces.evaluate(self.acc, self.drho)
+            self.fresh = True
+
+    def checkpoint(self) -> dict:
+        """Arrays and flags a restart needs to continue bit for bit."""
+        return {"acc": self.acc, "drho": self.drho, "fresh": self.fresh}
+
+    def restore(self, saved: dict):
+        self.resize()
+        self.acc[:] = saved["acc"]
+        if "drho" in saved and saved["drho"].shape == self.drho.shape:
+            self.drho[:] = saved["drho"]
+        self.fresh = bool(saved["fresh"])
+
+    # -- stages -----------------------------------------------------------------------
+
+    def free_motion(self, dt):
+        """x += dt (v + half_kick dt/2 a), v += dt a, rho += dt D; then walls and EOS."""
+        st = self.state
+        self.rates()
+        _drift(self.pos0, st.pos, st.vel, self.acc, dt, self.half_kick)
+        _kick(st.vel, self.acc, dt)
+        if self.evolves_density:
+            _kick(st.rho.reshape(-1, 1), self.drho.reshape(-1, 1), dt)
+        self.after_drift(self.pos0, st.pos, st.vel, self.acc, dt)
+        self.eos()
 
 
 class Euler(_Scheme):
@@ -88,8 +139,8 @@ class Euler(_Scheme):
 
     name = "euler"
 
-    def step(self, sim, dt):
-        self.free_motion(sim, dt)
+    def step(self, dt):
+        self.free_motion(dt)
         self.fresh = False
 
 
@@ -99,17 +150,21 @@ class Leapfrog(_Scheme):
     name = "leapfrog"
     half_kick = 1.0
 
-    def step(self, sim, dt):
-        st = sim.state
-        self.free_motion(sim, dt)
-        sim.acc_old[:] = sim.acc
-        if sim.evolves_density:
-            sim.drho_old[:] = sim.drho
-        sim.compute_rates()
-        _correct(st.vel, sim.acc, sim.acc_old, 0.5 * dt)
-        if sim.evolves_density:
-            _correct(st.rho.reshape(-1, 1), sim.drho.reshape(-1, 1), sim.drho_old.reshape(-1, 1), 0.5 * dt)
-            sim.update_pressure()
+    def _extra_arrays(self, n, dim):
+        self.acc_old = np.zeros((n, dim))
+        self.drho_old = np.zeros(n)
+
+    def step(self, dt):
+        st = self.state
+        self.free_motion(dt)
+        self.acc_old[:] = self.acc
+        if self.evolves_density:
+            self.drho_old[:] = self.drho
+        self.forces.evaluate(self.acc, self.drho)
+        _correct(st.vel, self.acc, self.acc_old, 0.5 * dt)
+        if self.evolves_density:
+            _correct(st.rho.reshape(-1, 1), self.drho.reshape(-1, 1), self.drho_old.reshape(-1, 1), 0.5 * dt)
+            self.eos()
         self.fresh = True
 
 

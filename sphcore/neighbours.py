@@ -9,8 +9,24 @@ the grid has one layer in z, so the same code serves both dimensions.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
+
+
+class Grid(NamedTuple):
+    """The arrays a kernel needs to walk neighbours: one numba argument instead of five.
+
+    ``order`` (n,) particle indices grouped by cell, ``cell_start`` (ncells + 1,) CSR
+    offsets, ``lo`` (3,) lower corner (m), ``cell_size`` (m), ``ncell`` (3,) cells per axis.
+    """
+
+    order: np.ndarray
+    cell_start: np.ndarray
+    lo: np.ndarray
+    cell_size: float
+    ncell: np.ndarray
 
 
 @njit(cache=True)
@@ -66,6 +82,31 @@ def neighbour_cell(cx, cy, cz, q, ncell, dim):
     return x + ncell[0] * (y + ncell[1] * z)
 
 
+@njit(cache=True, inline="always")
+def cell_of(grid, pos, i):
+    """Cell coordinates (cx, cy, cz) of particle i in ``grid``."""
+    return cell_coords(pos, i, grid.lo, grid.cell_size, grid.ncell)
+
+
+@njit(cache=True, inline="always")
+def cell_range(grid, cx, cy, cz, q, dim):
+    """(k0, k1): the particles of the q-th cell around (cx, cy, cz) are
+    ``grid.order[k0:k1]``; an empty range for a cell outside the grid.
+
+    Every kernel walks the neighbours of particle i the same way::
+
+        cx, cy, cz = cell_of(grid, pos, i)
+        for q in range(3 ** dim):
+            k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
+            for k in range(k0, k1):
+                j = grid.order[k]
+    """
+    c = neighbour_cell(cx, cy, cz, q, grid.ncell, dim)
+    if c < 0:
+        return 0, 0
+    return grid.cell_start[c], grid.cell_start[c + 1]
+
+
 @njit(cache=True)
 def _cell_ids(pos, lo, cell_size, ncell, out):
     for i in range(pos.shape[0]):
@@ -111,6 +152,7 @@ class CellGrid:
         self.order = np.empty(n, np.int64)
         self.cell_start = np.empty(ncells + 1, np.int64)
         _counting_sort(self.cell, ncells, self.order, self.cell_start)
+        self.view = Grid(self.order, self.cell_start, self.lo, self.cell_size, self.ncell)
 
 
 @njit(cache=True)

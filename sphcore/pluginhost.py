@@ -1,7 +1,14 @@
 """The pluggy host: plugins come from the entry-point group ``sphcore``, built-in or not.
 
-Entry points are read once per process. Each run gets its own PluginManager holding one
-fresh instance of each plugin its case names, so plugin state never leaks between runs.
+Entry points are read once per process. Each plugin is checked alone when it is first
+loaded: an import error, a hook whose name is not specified, or a hook argument the
+specification does not have marks that plugin *broken* with a one-line reason naming it and
+its distribution. A broken plugin spoils nothing else: cases that do not select it run,
+``sph plugins`` lists it as broken, and a case that selects it (or sets its table) gets
+the reason as a clean error (exit 2).
+
+Each run gets its own PluginManager holding one fresh instance of each plugin its case
+names, so plugin state never leaks between runs.
 """
 
 from __future__ import annotations
@@ -18,6 +25,11 @@ from .errors import CaseError
 GROUP = "sphcore"
 
 
+class PluginLoadError(Exception):
+    """A plugin cannot be used: it failed to import, implements a hook that does not exist,
+    takes an argument its hook does not have, or failed while declaring its options."""
+
+
 @dataclass(frozen=True)
 class PluginInfo:
     name: str
@@ -25,38 +37,15 @@ class PluginInfo:
     dist: str
     version: str
     cls: type | None
-    error: str = ""  # why it failed to import; the plugin is unusable but the others work
+    error: str = ""  # why the plugin is broken; "" when it is usable
+    tables: dict | None = None  # {table: {key: Option}} it declares (None when unknown)
 
+    @property
+    def label(self) -> str:
+        return f"plugin {self.name!r} ({self.value}, distribution {self.dist} {self.version})"
 
-class PluginLoadError(Exception):
-    """A plugin could not be imported or implements a hook that does not exist."""
-
-
-@functools.lru_cache(maxsize=1)
-def available() -> dict[str, PluginInfo]:
-    """Every plugin installed under the entry-point group, by name (loaded once)."""
-    out = {}
-    for ep in entry_points(group=GROUP):
-        if ep.name in out:
-            continue  # the first distribution on sys.path wins, as for any entry point
-        dist = ep.dist.name if ep.dist else "?"
-        version = ep.dist.version if ep.dist else "?"
-        try:
-            out[ep.name] = PluginInfo(ep.name, ep.value, dist, version, ep.load())
-        except Exception as e:  # a broken plugin names itself when used, and spoils no other
-            out[ep.name] = PluginInfo(ep.name, ep.value, dist, version, None, f"{type(e).__name__}: {e}")
-    return out
-
-
-def refresh() -> None:
-    """Forget the cached entry points (after installing a plugin in the same process)."""
-    available.cache_clear()
-
-
-def _instance(info: PluginInfo):
-    if info.cls is None:
-        raise PluginLoadError(f"plugin {info.name!r} ({info.value}, {info.dist}) failed to import: {info.error}")
-    return info.cls()
+    def fail(self):
+        raise PluginLoadError(f"{self.label} is broken: {self.error}")
 
 
 def _manager() -> pluggy.PluginManager:
@@ -65,8 +54,57 @@ def _manager() -> pluggy.PluginManager:
     return pm
 
 
+def _one_line(e: Exception) -> str:
+    return " ".join(f"{type(e).__name__}: {e}".split())
+
+
+def _tables_of(plugin) -> dict:
+    """The case tables an instance declares through ``sph_options`` (called directly)."""
+    declare = getattr(plugin, "sph_options", None)
+    return dict(declare() or {}) if declare else {}
+
+
+def _inspect(name, value, dist, version, load) -> PluginInfo:
+    """Load and check one plugin alone; a failure makes it broken, never raises."""
+    try:
+        cls = load()
+    except Exception as e:  # any import-time error of third-party code
+        return PluginInfo(name, value, dist, version, None, f"import failed: {_one_line(e)}")
+    tables = None
+    try:
+        instance = cls()
+        tables = _tables_of(instance)
+        pm = _manager()
+        pm.register(instance, name=name)
+        pm.check_pending()
+    except pluggy.PluginValidationError as e:
+        return PluginInfo(name, value, dist, version, cls, f"invalid hook: {' '.join(str(e).split())}", tables)
+    except Exception as e:
+        return PluginInfo(name, value, dist, version, cls, f"failed while loading: {_one_line(e)}", tables)
+    return PluginInfo(name, value, dist, version, cls, "", tables)
+
+
+@functools.lru_cache(maxsize=1)
+def available() -> dict[str, PluginInfo]:
+    """Every plugin installed under the entry-point group, by name (loaded and checked once)."""
+    out = {}
+    for ep in entry_points(group=GROUP):
+        if ep.name in out:
+            continue  # the first distribution on sys.path wins, as for any entry point
+        dist = ep.dist.name if ep.dist else "?"
+        version = ep.dist.version if ep.dist else "?"
+        out[ep.name] = _inspect(ep.name, ep.value, dist, version, ep.load)
+    return out
+
+
+def refresh() -> None:
+    """Forget the cached entry points (after installing a plugin in the same process)."""
+    available.cache_clear()
+
+
 def make_manager(names, file="case.toml") -> pluggy.PluginManager:
-    """A manager with one new instance of each named plugin; unknown names are CaseErrors."""
+    """A manager with one new instance of each named plugin; unknown names are CaseErrors,
+    broken plugins PluginLoadErrors naming the plugin and its distribution."""
     plugins = available()
     pm = _manager()
     for name in names:
@@ -74,17 +112,58 @@ def make_manager(names, file="case.toml") -> pluggy.PluginManager:
             raise CaseError(file, "plugins.use", f"unknown plugin {name!r} (installed: {', '.join(sorted(plugins)) or 'none'})")
         if pm.get_plugin(name) is not None:
             raise CaseError(file, "plugins.use", f"plugin {name!r} is listed twice")
-        pm.register(_instance(plugins[name]), name=name)
-    check(pm)
+        info = plugins[name]
+        if info.error:
+            info.fail()
+        pm.register(info.cls(), name=name)
     return pm
 
 
-def check(pm: pluggy.PluginManager) -> None:
-    """Fail loudly on a hook implementation with no matching specification (a misspelt hook)."""
-    try:
-        pm.check_pending()
-    except pluggy.PluginValidationError as e:
-        raise PluginLoadError(f"plugin {pm.get_name(e.plugin) or '?'!r}: {e}") from e
+def option_schemas(file="case.toml", sections=()) -> dict:
+    """The case tables every usable installed plugin declares: {table: {key: Option}}.
+
+    Tables of installed but unselected plugins are validated too, so switching plugins is
+    one change to ``plugins.use``. A section of ``sections`` (the case's) that belongs to a
+    broken plugin raises that plugin's error instead of "unknown section".
+    """
+    schemas, owner = {}, {}
+    for name, info in sorted(available().items()):
+        tables = info.tables
+        if info.error:
+            known = set(tables or ()) | {name}
+            if known & set(sections):
+                info.fail()
+            continue
+        for table, schema in (tables or {}).items():
+            if table in schemas:
+                raise PluginLoadError(f"{info.label} declares table [{table}] which plugin {owner[table]!r} owns")
+            schemas[table], owner[table] = schema, name
+    return schemas
+
+
+def configure(pm, case) -> None:
+    """Call every selected plugin's ``sph_configure``; a crash (not a CaseError) there is
+    reported as that plugin's fault."""
+    for impl in pm.hook.sph_configure.get_hookimpls():
+        try:
+            impl.function(*[{"case": case}[a] for a in impl.argnames])
+        except CaseError:
+            raise
+        except Exception as e:
+            info = available().get(impl.plugin_name)
+            label = info.label if info else f"plugin {impl.plugin_name!r}"
+            raise PluginLoadError(f"{label} failed in sph_configure: {_one_line(e)}") from e
+
+
+def summaries(pm, ctx) -> dict[str, dict]:
+    """Each plugin's figures for summary.json, by plugin name: its ``ctx.stats`` merged with
+    what its ``sph_summary`` returns."""
+    out = ctx.all_stats()
+    for impl in pm.hook.sph_summary.get_hookimpls():
+        figures = impl.function(*[{"ctx": ctx}[a] for a in impl.argnames])
+        if figures:
+            out.setdefault(impl.plugin_name, {}).update(figures)
+    return out
 
 
 def hooks_of(pm: pluggy.PluginManager, name: str) -> list[str]:
@@ -93,42 +172,17 @@ def hooks_of(pm: pluggy.PluginManager, name: str) -> list[str]:
 
 
 def describe() -> list[dict]:
-    """Name, distribution, version and implemented hooks of every installed plugin."""
+    """Name, distribution, version and implemented hooks (or why it is broken) of every
+    installed plugin."""
     rows = []
     for name, info in sorted(available().items()):
-        if info.cls is None:
-            rows.append({"name": name, "dist": info.dist, "version": info.version, "hooks": [f"BROKEN: {info.error}"]})
-            continue
-        try:
+        row = {"name": name, "dist": info.dist, "version": info.version, "tables": sorted(info.tables or ()),
+               "broken": info.error}
+        if not info.error:
             pm = _manager()
-            pm.register(_instance(info), name=name)
-            check(pm)
-        except PluginLoadError as e:
-            rows.append({"name": name, "dist": info.dist, "version": info.version, "hooks": [f"BROKEN: {e}"]})
-            continue
-        rows.append({"name": name, "dist": info.dist, "version": info.version, "hooks": hooks_of(pm, name)})
+            pm.register(info.cls(), name=name)
+            row["hooks"] = hooks_of(pm, name)
+        else:
+            row["hooks"] = []
+        rows.append(row)
     return rows
-
-
-def option_schemas() -> dict:
-    """The case tables every installed plugin declares: {table: {key: Option}}.
-
-    Tables of installed but unselected plugins are validated too, so switching plugins is
-    one change to ``plugins.use``.
-    """
-    schemas = {}
-    for name, info in sorted(available().items()):
-        if info.cls is None:
-            continue  # its tables are unknown; using it reports the import error
-        try:
-            pm = _manager()
-            pm.register(_instance(info), name=name)
-            check(pm)
-        except PluginLoadError:
-            continue  # broken: reported when a case selects it (make_manager) or by `sph plugins`
-        for declared in pm.hook.sph_options():
-            for table, schema in (declared or {}).items():
-                if table in schemas:
-                    raise PluginLoadError(f"plugin {name!r} declares table [{table}] which another plugin owns")
-                schemas[table] = schema
-    return schemas

@@ -37,9 +37,9 @@ def load(case_dir, overrides=(), t_end=None):
     raw = apply_overrides(read_toml(file), overrides)
     if t_end is not None:
         raw = apply_overrides(raw, [(["time", "t_end"], t_end)])
-    case = validate(raw, file, pluginhost.option_schemas())
+    case = validate(raw, file, pluginhost.option_schemas(file, raw))
     pm = pluginhost.make_manager(case.config["plugins"]["use"], file)
-    pm.hook.sph_configure(case=case)
+    pluginhost.configure(pm, case)
     return case, pm
 
 
@@ -124,17 +124,15 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
         wall = time.perf_counter() - start
         steps = sim.step - step0
         summary = {
-            "case": case.name, "status": status, "message": message,
+            "case": case.name, "status": status, "message": message, "output_dir": str(out),
             "t": sim.t, "wall_time_s": wall, "steps": steps, "n_particles": sim.state.n,
             "particle_steps_per_s": steps * sim.state.n / wall if wall > 0 else 0.0,
-            "escaped": int(sim.stats.get("escaped", 0)), "peak_memory_mb": peak_memory_mb(),
-            "energy_growth_max": sim.stats.get("energy_growth_max", 0.0),
-            "c0": sim.c0, "h": sim.h, "plugins": case.config["plugins"]["use"],
+            "peak_memory_mb": peak_memory_mb(),
+            "c0": sim.params.c0, "h": sim.params.h, "plugins": case.config["plugins"]["use"],
             "counters": dict(sim.counters),
         }
-        for extra in pm.hook.sph_summary(sim=sim):
-            summary.update(extra or {})
-        pm.hook.sph_finish(sim=sim)
+        summary.update(pluginhost.summaries(pm, sim.ctx))
+        pm.hook.sph_finish(ctx=sim.ctx)
         _write_json(out / "summary.json", summary)
     summary["_sim"] = sim
     summary["_signum"] = stop.get("stopped_by")

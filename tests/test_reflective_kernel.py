@@ -6,7 +6,7 @@ import pytest
 from sphcore.geometry import Planes
 from sphcore.particles import lattice
 from sphcore_plugins.reflective.collision import TOL_REL, clearance, outside, reflect_particles
-from sphcore_plugins.reflective.domains import box, random_directions, random_rotation, sample_inside, wedge
+from domains import box, random_directions, random_rotation, sample_inside, wedge
 
 
 def run(pos0, pos, vel, planes, r, cr, acc=None, **kw):

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sphcore_plugins.reflective.collision import outside, reflect_particles
-from sphcore_plugins.reflective.domains import (box, random_directions, random_polytope,
+from domains import (box, random_directions, random_polytope,
                                                 random_rotation, sample_inside, wedge)
 
 SETTINGS = settings(max_examples=150, deadline=None)

@@ -13,10 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.hookspecs import hookimpl
-from sphcore.kernels import SUPPORT
-from sphcore.neighbours import CellGrid
-from sphcore.options import Option
+from sphcore.api import CaseError, CellGrid, Option, hookimpl
 
 from .detect import position_divergence
 
@@ -32,8 +29,6 @@ class FreeSurfacePlugin:
 
     @hookimpl
     def sph_configure(self, case):
-        from sphcore.errors import CaseError
-
         cfg = case.config["free_surface"]
         if not case.config["physics"]["sph"]:
             raise CaseError(case.file, "plugins.use", "free_surface needs physics.sph = true")
@@ -45,22 +40,22 @@ class FreeSurfacePlugin:
         self.count = 0
 
     @hookimpl
-    def sph_before_forces(self, sim):
-        st = sim.state
+    def sph_before_forces(self, ctx):
+        st = ctx.state
         if self.div.shape[0] != st.n:
             self.div = np.zeros(st.n)
-        grid = CellGrid(st.pos, SUPPORT * sim.h)
-        position_divergence(st.n, st.pos, st.rho, st.m, grid.order, grid.cell_start, grid.lo, grid.cell_size,
-                            grid.ncell, sim.kernel_id, sim.h, self.normals, self.offsets, self.mirror, self.div)
+        grid = CellGrid(st.pos, ctx.params.support)
+        position_divergence(st.n, st.pos, st.rho, st.m, grid.view, ctx.params, self.normals, self.offsets,
+                            self.mirror, self.div)
         surface = self.div < self.threshold
         # p = 0 and rho = rho0 together: the Tait pressure of rho0 is zero, so the surface
         # density cannot drift away from the pressure it is held at (without this the
         # continuity density of separating surface particles falls without bound)
-        sim.force_pressure[surface] = 0.0
-        st.rho[surface] = sim.rho0
+        ctx.force_pressure[surface] = 0.0
+        st.rho[surface] = ctx.params.rho0
         self.count = int(surface.sum())
-        sim.stats["free_surface_particles"] = self.count
+        ctx.stats(self)["free_surface_particles"] = self.count
 
     @hookimpl
-    def sph_summary(self, sim):
+    def sph_summary(self, ctx):
         return {"free_surface_particles_last": self.count}

@@ -14,26 +14,23 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from sphcore.kernels import kernel_f
-from sphcore.neighbours import cell_coords, neighbour_cell
+from sphcore.api import cell_of, cell_range, kernel_f, particle_distance
 
 
 @njit(cache=True, parallel=True)
-def position_divergence(n, pos, rho, m, order, cell_start, lo, cell_size, ncell, kernel_id, h,
-                        normals, offsets, mirror, out):
+def position_divergence(n, pos, rho, m, grid, prm, normals, offsets, mirror, out):
     """div r (dimensionless) for the first n particles; wall images included when ``mirror``."""
     dim = pos.shape[1]
-    r2max = (2.0 * h) ** 2
+    h, kernel_id, support = prm.h, prm.kernel_id, prm.support
+    r2max = support * support
     nplanes = normals.shape[0]
     for i in prange(n):
-        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
+        cx, cy, cz = cell_of(grid, pos, i)
         s = 0.0
         for q in range(3 ** dim):
-            c = neighbour_cell(cx, cy, cz, q, ncell, dim)
-            if c < 0:
-                continue
-            for k in range(cell_start[c], cell_start[c + 1]):
-                j = order[k]
+            k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
+            for k in range(k0, k1):
+                j = grid.order[k]
                 vj = m[j] / rho[j]
                 r2 = 0.0
                 for d in range(dim):
@@ -44,10 +41,8 @@ def position_divergence(n, pos, rho, m, order, cell_start, lo, cell_size, ncell,
                 if not mirror:
                     continue
                 for p in range(nplanes):
-                    dj = -offsets[p]
-                    for d in range(dim):
-                        dj += normals[p, d] * pos[j, d]
-                    if dj >= 2.0 * h:
+                    dj = particle_distance(normals, offsets, p, pos, j)
+                    if dj >= support:
                         continue
                     r2 = 0.0
                     for d in range(dim):

@@ -15,8 +15,7 @@ import math
 
 import numpy as np
 
-from sphcore.hookspecs import hookimpl
-from sphcore.options import Option
+from sphcore.api import hookimpl, Option
 
 from . import reference
 
@@ -84,37 +83,37 @@ class FrontGauge:
         self.next_t = 0.0
 
     @hookimpl
-    def sph_setup(self, sim):
+    def sph_setup(self, ctx):
         a = self.cfg["column_width"]
         if a is None:
-            x = sim.state.pos[:, 0]
-            a = float(x.max() - x.min() + 2 * sim.state.radius.max())
+            x = ctx.state.pos[:, 0]
+            a = float(x.max() - x.min() + 2 * ctx.state.radius.max())
         self.a = a
-        # samples live in sim.stats, which the checkpoint keeps: a restarted run continues
+        # samples live in ctx.kept(self), which the checkpoint keeps: a restarted run continues
         # the series instead of starting a new one
-        self.samples = sim.stats.setdefault("front_gauge_samples", [])
+        self.samples = ctx.kept(self).setdefault("samples", [])
         if not self.samples:
-            self._sample(sim)
-        self.next_t = (math.floor(sim.t / self.cfg["every_dt"] + 1e-9) + 1) * self.cfg["every_dt"]
+            self._sample(ctx)
+        self.next_t = (math.floor(ctx.t / self.cfg["every_dt"] + 1e-9) + 1) * self.cfg["every_dt"]
 
-    def _sample(self, sim):
-        st = sim.state
-        self.samples.append((sim.t, front_position(st.pos, st.radius, self.floor, self.cfg["band"], self.cfg["gap"])))
-
-    @hookimpl
-    def sph_after_step(self, sim):
-        if sim.t >= self.next_t - 1e-12:
-            self._sample(sim)
-            self.next_t = (math.floor(sim.t / self.cfg["every_dt"] + 1e-9) + 1) * self.cfg["every_dt"]
+    def _sample(self, ctx):
+        st = ctx.state
+        self.samples.append((ctx.t, front_position(st.pos, st.radius, self.floor, self.cfg["band"], self.cfg["gap"])))
 
     @hookimpl
-    def sph_summary(self, sim):
+    def sph_after_step(self, ctx):
+        if ctx.t >= self.next_t - 1e-12:
+            self._sample(ctx)
+            self.next_t = (math.floor(ctx.t / self.cfg["every_dt"] + 1e-9) + 1) * self.cfg["every_dt"]
+
+    @hookimpl
+    def sph_summary(self, ctx):
         if not self.samples:
             return None
         t, x = np.array(self.samples).T
-        if sim.output_dir is not None and sim.output_dir.exists():
-            np.savetxt(sim.output_dir / "front.csv", np.c_[t, x], delimiter=",", header="t_s,x_front_m",
+        if ctx.output_dir is not None and ctx.output_dir.exists():
+            np.savetxt(ctx.output_dir / "front.csv", np.c_[t, x], delimiter=",", header="t_s,x_front_m",
                        comments="", fmt="%.8g")
-        out = compare(t, x, self.a, self.x_wall - 2 * float(np.median(sim.state.radius)))
+        out = compare(t, x, self.a, self.x_wall - 2 * float(np.median(ctx.state.radius)))
         out["column_width_m"] = self.a
         return out

@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.hookspecs import hookimpl
-from sphcore.options import Option
+from sphcore.api import hookimpl, Option
 
 
 def layer_errors(y, p, dx, H, rho0, g):
@@ -40,23 +39,23 @@ class PressureGauge:
         self.skip = case.config["pressure_gauge"]["skip_layers"]
 
     @hookimpl
-    def sph_setup(self, sim):
-        st = sim.state
+    def sph_setup(self, ctx):
+        st = ctx.state
         order = np.argsort(st.id)
         self.ids0, self.pos0 = st.id[order].copy(), st.pos[order].copy()
-        self.floor = float((self.pos0 @ sim.up).min() - st.radius.max()) if sim.g_abs > 0 else 0.0
-        self.H = float((self.pos0 @ sim.up).max() + st.radius.max()) - self.floor
+        self.floor = float((self.pos0 @ ctx.params.up).min() - st.radius.max()) if ctx.params.g_abs > 0 else 0.0
+        self.H = float((self.pos0 @ ctx.params.up).max() + st.radius.max()) - self.floor
 
     @hookimpl
-    def sph_summary(self, sim):
-        st = sim.state
+    def sph_summary(self, ctx):
+        st = ctx.state
         order = np.argsort(st.id)
         pos, p = st.pos[order], st.p[order]
         if not np.array_equal(st.id[order], self.ids0):
             return {"particles_lost": int(self.ids0.size - st.n)}
-        z = pos @ sim.up - self.floor
+        z = pos @ ctx.params.up - self.floor
         dx = 2.0 * float(np.median(st.radius))
-        rows = layer_errors(z, p, dx, self.H, sim.rho0, sim.g_abs)
+        rows = layer_errors(z, p, dx, self.H, ctx.params.rho0, ctx.params.g_abs)
         below = rows[:, 0] < self.H - self.skip * dx
         return {
             "particles_lost": 0,

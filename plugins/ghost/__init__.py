@@ -31,10 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.errors import CaseError
-from sphcore.hookspecs import hookimpl
-from sphcore.kernels import SUPPORT
-from sphcore.options import Option
+from sphcore.api import CaseError, Option, hookimpl
 
 from .mirror import MAX_PLANES, TAIT_BASE_MIN, MirrorImages, inverse_tait
 
@@ -84,20 +81,18 @@ class GhostPlugin:
                                    hydrostatic=cfg["hydrostatic"])
 
     @hookimpl
-    def sph_extra_sources(self, sim):
+    def sph_extra_sources(self, ctx):
         # Read the state now: the core reorders particles by cell every few steps.
-        st = sim.state
+        st = ctx.state
         # the pressure the momentum equation uses: with modified pressure, its dynamic part
-        p = getattr(sim, "force_pressure", st.p)
-        modified = bool(getattr(sim, "modified_pressure", False))
-        src = self.mirror.generate(st.pos, st.vel, st.rho, p, st.m, st.kind, SUPPORT * sim.h,
-                                   np.asarray(sim.gravity, float), sim.rho0, sim.c0, sim.gamma, sim.p_background,
-                                   rho_ref=sim.rho0 if modified else 0.0)
+        prm = ctx.params
+        src = self.mirror.generate(st.pos, st.vel, st.rho, ctx.force_pressure, st.m, st.kind, prm.support,
+                                   prm.gravity, prm.rho0, prm.c0, prm.gamma, prm.p_background, rho_ref=prm.rho_ref)
         self.ghosts_max = max(self.ghosts_max, src.n)
         return src
 
     @hookimpl
-    def sph_summary(self, sim):
+    def sph_summary(self, ctx):
         m = self.mirror
         return {"ghosts_last": m.n if m else 0, "ghosts_max": self.ghosts_max,
                 "ghost_reallocations": m.reallocations if m else 0}

@@ -44,11 +44,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from sphcore.particles import FLUID, Sources
+
+from sphcore.api import FLUID, Sources, eos, plane_distance
+
 
 #: smallest base (p - p_b)/B + 1 of the inverse Tait equation: keeps rho_g real and
 #: positive (>= 0.37 rho0 for gamma = 7) under strong tension
-TAIT_BASE_MIN = 1e-3
+TAIT_BASE_MIN = eos.BASE_MIN
 
 #: plane subsets are bit masks of one int64
 MAX_PLANES = 62
@@ -62,15 +64,6 @@ PARALLEL_MIN = 250_000
 #: relative tolerance (of the support) for "on the plane": a particle exactly on a wall
 #: makes an image on top of itself, which carries no information
 TOL_REL = 1e-9
-
-
-@njit(cache=True, inline="always")
-def _distance(normals, offsets, k, x0, x1, x2):
-    """Signed distance d = n_k . x - offset_k (m); x2 is 0 in 2D."""
-    d = normals[k, 0] * x0 + normals[k, 1] * x1 - offsets[k]
-    if normals.shape[1] == 3:
-        d += normals[k, 2] * x2
-    return d
 
 
 @njit(cache=True, inline="always")
@@ -100,7 +93,7 @@ def _image(pos, vel, i, normals, offsets, sub, free_slip, tol):
         if s & 1:
             n0, n1 = normals[k, 0], normals[k, 1]
             n2 = normals[k, 2] if dim == 3 else 0.0
-            d = _distance(normals, offsets, k, x0, x1, x2)
+            d = plane_distance(normals, offsets, k, x0, x1, x2)
             x0 -= 2.0 * d * n0
             x1 -= 2.0 * d * n1
             x2 -= 2.0 * d * n2
@@ -115,7 +108,7 @@ def _image(pos, vel, i, normals, offsets, sub, free_slip, tol):
         v0, v1, v2 = -vel[i, 0], -vel[i, 1], (-vel[i, 2] if dim == 3 else 0.0)
     dmin = np.inf
     for k in range(normals.shape[0]):
-        dmin = min(dmin, _distance(normals, offsets, k, x0, x1, x2))
+        dmin = min(dmin, plane_distance(normals, offsets, k, x0, x1, x2))
     return dmin < -tol, x0, x1, x2, v0, v1, v2
 
 
@@ -218,9 +211,8 @@ def _fill_one(pos, vel, rho, p, m, i, near, normals, offsets, max_order, free_sl
                 if hydrostatic and b > 0.0:
                     # g . (x_g - x_i) > 0 when the ghost lies lower: more pressure there
                     pg = p[i] + (rho[i] - rho_ref) * rise
-                    base = max((pg - p_background) / b + 1.0, TAIT_BASE_MIN)
                     gp[j] = pg
-                    grho[j] = rho0 * base**inv_gamma
+                    grho[j] = eos.density(pg, rho0, b, inv_gamma, p_background)
                 else:
                     gp[j] = p[i]
                     grho[j] = rho[i]
@@ -238,7 +230,7 @@ def fill_images(pos, vel, rho, p, m, near, normals, offsets, max_order, free_sli
 
     Ghost pressure and density: see the module docstring; b = c0^2 rho0 / gamma (Pa).
     """
-    b = c0 * c0 * rho0 / gamma
+    b = eos.tait_b(c0, rho0, gamma)
     for i in prange(pos.shape[0]):
         if start[i + 1] > start[i]:
             _fill_one(pos, vel, rho, p, m, i, near[i], normals, offsets, max_order, free_slip, tol, hydrostatic,
@@ -250,7 +242,7 @@ def fill_images_serial(pos, vel, rho, p, m, near, normals, offsets, max_order, f
                        hydrostatic, gravity, rho0, c0, gamma, p_background, rho_ref, start,
                        gpos, gvel, grho, gp, gm, gsrc):
     """:func:`fill_images` on one thread."""
-    b = c0 * c0 * rho0 / gamma
+    b = eos.tait_b(c0, rho0, gamma)
     for i in range(pos.shape[0]):
         if start[i + 1] > start[i]:
             _fill_one(pos, vel, rho, p, m, i, near[i], normals, offsets, max_order, free_slip, tol, hydrostatic,
@@ -324,7 +316,7 @@ class MirrorImages:
 
     @staticmethod
     def _gravity(g):
-        """(3,) float64, zero-padded: the core's sim.gravity already is; tests may pass (dim,)."""
+        """(3,) float64, zero-padded: the core's ctx.params.gravity already is; tests may pass (dim,)."""
         out = np.zeros(3)
         g = np.asarray(g, dtype=np.float64).ravel()
         out[: g.size] = g
@@ -337,6 +329,5 @@ class MirrorImages:
 
 
 def inverse_tait(p, rho0, c0, gamma, p_background=0.0):
-    """Density (kg/m^3) whose Tait pressure is p (Pa), base clamped at TAIT_BASE_MIN (numpy)."""
-    b = c0 * c0 * rho0 / gamma
-    return rho0 * np.maximum((np.asarray(p, float) - p_background) / b + 1.0, TAIT_BASE_MIN) ** (1.0 / gamma)
+    """Density (kg/m^3) whose Tait pressure is p (Pa), base clamped (numpy arrays)."""
+    return eos.density_of(p, rho0, c0, gamma, p_background)

@@ -8,18 +8,18 @@ into the domain (collision detection and response, :mod:`.collision`). Case tabl
     max_reflections = 1000 # reflections per particle and step before the guard
     velocity = "contact"   # Eq. 2 at the contact point ("contact") or the end point ("end")
 
-Run summary: ``escaped`` counts particle-steps that needed the guard (put back at the
-start of the step after ``max_reflections``; none ever ends outside), ``reflections``
-the particle-steps with at least one reflection, ``reflection_events`` all reflections.
+Run summary (``summary.json`` under ``"reflective"``): ``guard_returns`` counts
+particle-steps that needed the guard (put back at the start of the step after
+``max_reflections``: no particle ever ends a step outside, so nothing escapes),
+``reflected_particle_steps`` the particle-steps with at least one reflection,
+``reflection_events`` all reflections.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from sphcore.errors import CaseError
-from sphcore.hookspecs import hookimpl
-from sphcore.options import Option
+from sphcore.api import CaseError, Option, hookimpl
 
 from .collision import (TOL_REL, clearance, min_clearance, outside, outside_mask, reflect,
                         reflect_particles)
@@ -79,22 +79,22 @@ class ReflectivePlugin:
         self.offsets = np.ascontiguousarray(planes.offsets, dtype=np.float64)
 
     @hookimpl
-    def sph_setup(self, sim):
+    def sph_setup(self, ctx):
         # The guard relies on every start-of-step position being inside; check the first.
-        st = sim.state
+        st = ctx.state
         if st.n == 0:
             return
         bad = outside(st.pos, st.radius, (self.normals, self.offsets))
         if bad.any():
             c = clearance(st.pos, st.radius, (self.normals, self.offsets))
             worst = int(np.argmin(np.where(bad, c / st.radius, np.inf)))
-            raise CaseError(getattr(sim.case, "file", "case.toml"), "blocks",
+            raise CaseError(getattr(ctx.case, "file", "case.toml"), "blocks",
                             f"particle id {int(st.id[worst])} at {st.pos[worst].tolist()} overlaps "
                             f"a wall by {-c[worst]:.3g} m (a centre needs distance >= radius)")
 
     # trylast: walls act after any other plugin has moved particles in this hook
     @hookimpl(trylast=True)
-    def sph_after_integrate(self, sim, pos0, pos, vel, acc):
+    def sph_after_integrate(self, ctx, pos0, pos, vel, acc):
         """Reflect the particles that crossed a wall this step (``pos``, ``vel`` in place).
 
         The contact form of Eq. 2 assumes the step was free motion under the constant
@@ -108,19 +108,13 @@ class ReflectivePlugin:
         if self._guarded.shape[0] != n:
             self._guarded = np.zeros(n, np.int8)
             self._counts = np.zeros(n, np.int32)
-        guarded = reflect(pos0, pos, vel, acc, sim.state.radius, self.normals, self.offsets,
+        guarded = reflect(pos0, pos, vel, acc, ctx.state.radius, self.normals, self.offsets,
                           self.cr, self.max_reflections, self.velocity_at_contact,
                           self._guarded, self._counts)
         hit = int(np.count_nonzero(self._counts))
-        # counters live in sim.stats, which checkpoints keep: cumulative across restarts
-        stats = sim.stats
-        stats["escaped"] = stats.get("escaped", 0) + guarded  # particle-steps put back by the guard
-        stats["reflected"] = stats.get("reflected", 0) + hit  # particle-steps with a reflection
-        if hit:
-            stats["reflection_events"] = stats.get("reflection_events", 0) + int(self._counts.sum(dtype=np.int64))
-
-    @hookimpl
-    def sph_summary(self, sim):
-        """Guarded particle-steps, particle-steps with reflections, and all reflections."""
-        return {"escaped": sim.stats.get("escaped", 0), "reflections": sim.stats.get("reflected", 0),
-                "reflection_events": sim.stats.get("reflection_events", 0)}
+        # ctx.stats: in summary.json under "reflective" and in every checkpoint, so the
+        # counts are cumulative across restarts
+        stats = ctx.stats(self)
+        stats["guard_returns"] = stats.get("guard_returns", 0) + guarded
+        stats["reflected_particle_steps"] = stats.get("reflected_particle_steps", 0) + hit
+        stats["reflection_events"] = stats.get("reflection_events", 0) + int(self._counts.sum(dtype=np.int64))

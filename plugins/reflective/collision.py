@@ -51,26 +51,22 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from sphcore.api import particle_distance, plane_distance
+
 #: relative contact allowance: a plane collides only when d < r - TOL_REL * r
 TOL_REL = 1e-9
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _distance(normals, offsets, k, x, i, dim):
-    """Signed distance d = n_k . x_i - offset_k (Eq. 4, m). One definition for all checks."""
-    d = 0.0
-    for j in range(dim):
-        d += normals[k, j] * x[i, j]
-    return d - offsets[k]
+    """Signed distance d = n_k . x_i - offset_k (Eq. 4, m)."""
+    return particle_distance(normals, offsets, k, x, i)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _distance_to(normals, offsets, k, a0, a1, a2, dim):
-    """Signed distance of the point (a0, a1, a2) to plane k, same arithmetic as _distance."""
-    d = normals[k, 0] * a0 + normals[k, 1] * a1
-    if dim == 3:
-        d += normals[k, 2] * a2
-    return d - offsets[k]
+    """Signed distance of the point (a0, a1, a2) to plane k."""
+    return plane_distance(normals, offsets, k, a0, a1, a2)
 
 
 @numba.njit(cache=True)

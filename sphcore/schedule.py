@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import math
 
-from sphcore.errors import CaseError
-from sphcore.options import Option
+from .errors import CaseError
+from .options import Option
 
 #: simulated time between frames (s) when a case sets neither every_dt nor every_steps
 DEFAULT_EVERY_DT = 0.01

@@ -4,15 +4,15 @@ is stopping and must not fail again on the same disk)."""
 
 from __future__ import annotations
 
-from sphcore.errors import OutputError
-from sphcore.hookspecs import hookimpl
+from .errors import OutputError
+from .hookspecs import hookimpl
 
 from .schedule import Schedule, schedule_options
 
 
 class ScheduledWriter:
     """Base of the ``vtu`` and ``netcdf`` plugins; subclasses set ``table`` and ``what``
-    and implement ``write_frame(sim)`` and ``reopen_for_restart(sim)``."""
+    and implement ``write_frame(ctx)`` and ``reopen_for_restart(ctx)``."""
 
     table = ""  # the case table, named after the plugin
     what = ""  # what one frame is, for the option docs
@@ -31,27 +31,27 @@ class ScheduledWriter:
         self.schedule = Schedule.from_config(case, self.table)
 
     @hookimpl
-    def sph_setup(self, sim):
+    def sph_setup(self, ctx):
         # the restart's files are trimmed to the checkpoint at the first output call, where
-        # sim.t and sim.step are those of the restart point
-        self._restart_pending = bool(getattr(sim, "restarting", False))
+        # ctx.t and ctx.step are those of the restart point
+        self._restart_pending = bool(getattr(ctx, "restarting", False))
 
     @hookimpl
-    def sph_output(self, sim, final):
+    def sph_output(self, ctx, final):
         if self._failed:
             return
         try:
             if self._restart_pending:
                 self._restart_pending = False
-                self.reopen_for_restart(sim)
-            if self.schedule.due(sim.t, sim.step, final):
-                self.write_frame(sim)
+                self.reopen_for_restart(ctx)
+            if self.schedule.due(ctx.t, ctx.step, final):
+                self.write_frame(ctx)
         except OutputError:
             self._failed = True
             raise
 
-    def write_frame(self, sim):  # pragma: no cover - abstract
+    def write_frame(self, ctx):  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def reopen_for_restart(self, sim):  # pragma: no cover - abstract
+    def reopen_for_restart(self, ctx):  # pragma: no cover - abstract
         raise NotImplementedError

@@ -1,0 +1,149 @@
+"""One force evaluation: the rates (accelerations, density rates) of the current state.
+
+    [hook sph_before_forces] -> sources (fluid + [hook sph_extra_sources]) -> cell grid
+    -> [hook sph_wall_terms] -> kernel-gradient matrices (optional) -> pair sums
+    (:func:`sphcore.equations.sph_rates`) -> [hook sph_accelerations]
+
+Called by the integrators (:mod:`sphcore.integrators`) whenever they need rates; the
+pressure field the momentum equation uses is kept here too (:class:`PressureField`).
+Only what the case models runs; ``ctx.counters`` records which kernels did.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import eos
+from .equations import Fields, WallTerms, neighbour_sums, sph_rates, uniform_acceleration
+from .errors import Instability
+from .neighbours import CellGrid
+
+
+class PressureField:
+    """The equation of state applied to the particles.
+
+    ``state.p`` is always the physical pressure (Pa, for output and probes). With modified
+    pressure (Batchelor 1967) the momentum equation uses its dynamic part
+    P = p - rho0 g (surface_level - z) instead, kept in ``p_dyn``.
+    """
+
+    def __init__(self, prm):
+        self.prm = prm
+        self.p_dyn = np.zeros(0)
+
+    def force_pressure(self, state) -> np.ndarray:
+        """The pressure array the momentum equation uses (Pa)."""
+        if not self.prm.modified_pressure:
+            return state.p
+        if self.p_dyn.shape[0] != state.n:
+            self.p_dyn = np.zeros(state.n)
+        return self.p_dyn
+
+    def update(self, state, counters):
+        """Tait pressure of every particle from its density (:mod:`sphcore.eos`)."""
+        prm = self.prm
+        if not prm.sph:
+            return
+        eos.fill_pressure(state.rho, prm.rho0, prm.c0, prm.gamma, prm.p_background, self.force_pressure(state))
+        if prm.modified_pressure:
+            state.p[:] = self.p_dyn + prm.rho0 * prm.g_abs * (prm.surface_level - state.pos @ prm.up)
+        counters["eos"] += 1
+
+
+class Forces:
+    """Evaluates rates for one run. ``hook`` is the plugin manager's hook relay."""
+
+    def __init__(self, ctx, hook, pressure: PressureField):
+        self.ctx, self.hook, self.pressure = ctx, hook, pressure
+        self.wants_walls = bool(hook.sph_wall_terms.get_hookimpls())
+        self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
+        self._L = np.zeros((1, 3, 3))
+        self._shepard = np.zeros(1)
+        self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), False)
+
+    # -- pieces -----------------------------------------------------------------------
+
+    def sources(self) -> Fields:
+        """The fluid followed by any plugin source particles (ghosts), with the pressure the
+        momentum equation uses."""
+        ctx = self.ctx
+        st = ctx.state
+        extra = [s for s in self.hook.sph_extra_sources(ctx=ctx) if s is not None and s.n]
+        self.n_sources = sum(s.n for s in extra)
+        fluid = Fields(st.pos, st.vel, st.rho, self.pressure.force_pressure(st), st.m)
+        if not extra:
+            return fluid
+        ctx.counters["extra_sources"] += 1
+        return Fields(*(np.concatenate([a] + [getattr(s, f) for s in extra]) for a, f in zip(fluid, Fields._fields)))
+
+    def grid(self, pos, count=True) -> CellGrid:
+        ctx = self.ctx
+        try:
+            grid = CellGrid(pos, ctx.params.support)
+        except OverflowError as e:
+            far = int(np.argmax(np.abs(pos - np.median(pos, axis=0)).sum(axis=1)))
+            pid = int(ctx.state.id[far]) if far < ctx.state.n else -1
+            raise Instability(ctx.step, ctx.t, pid, f"particles spread far apart ({e})") from None
+        if count:
+            ctx.counters["neighbour_search"] += 1
+        return grid
+
+    def wall_terms(self) -> WallTerms:
+        """Per-particle wall terms from the plugins that supply them (``sph_wall_terms``)."""
+        if not self.wants_walls:
+            return self._wall
+        n, dim = self.ctx.state.n, self.ctx.params.dim
+        if self._wall.share.shape[0] != n:
+            self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), True)
+        w = self._wall
+        w.share[:] = 0.0
+        w.grad[:] = 0.0
+        w.hydro[:] = 0.0
+        self.hook.sph_wall_terms(ctx=self.ctx, terms=w)
+        self.ctx.counters["wall_terms"] += 1
+        return w
+
+    def _buffers(self, n):
+        prm = self.ctx.params
+        if prm.kernel_gradient and self._L.shape[0] != n:
+            self._L = np.zeros((n, 3, 3))
+
+    # -- the evaluation ---------------------------------------------------------------
+
+    def evaluate(self, acc, drho):
+        """Fill ``acc`` (n, dim) and ``drho`` (n,) with the rates of the current state."""
+        ctx = self.ctx
+        st, prm, counters = ctx.state, ctx.params, ctx.counters
+        counters["rates"] += 1
+        if not prm.sph:
+            uniform_acceleration(prm.gravity, acc)
+        else:
+            self.hook.sph_before_forces(ctx=ctx)
+            src = self.sources()
+            grid = self.grid(src.pos)
+            wall = self.wall_terms()
+            self._buffers(st.n)
+            if prm.kernel_gradient:
+                neighbour_sums(st.n, src, grid.view, prm, True, self._L, False, self._shepard)
+                counters["kernel_gradient_correction"] += 1
+            sph_rates(st.n, src, grid.view, prm, self._L, wall, acc, drho)
+            counters["continuity"] += 1
+            counters["momentum"] += 1
+            if prm.alpha > 0 or prm.beta > 0:
+                counters["artificial_viscosity"] += 1
+            if prm.nu > 0:
+                counters["laminar_viscosity"] += 1
+            if prm.delta > 0:
+                counters["density_diffusion"] += 1
+        self.hook.sph_accelerations(ctx=ctx, acc=acc)
+
+    def shepard_density(self, out):
+        """out <- Shepard-filtered density (Chen et al. 1999, CSPH zeroth order) over the
+        fluid and any plugin sources (ghosts complete the sums at walls)."""
+        ctx = self.ctx
+        if self._shepard.shape[0] != ctx.state.n:
+            self._shepard = np.zeros(ctx.state.n)
+        src = self.sources()
+        grid = self.grid(src.pos)
+        neighbour_sums(ctx.state.n, src, grid.view, ctx.params, False, self._L, True, self._shepard)
+        out[:] = self._shepard
