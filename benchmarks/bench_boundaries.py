@@ -114,7 +114,7 @@ def measure_one(n: int, steps: int, plugins, case: str) -> dict:
     t0 = time.perf_counter()
     for _ in range(steps):
         sim.advance()
-        ghosts.append(sim.n_sources)
+        ghosts.append(sim.forces.n_sources)
     wall = time.perf_counter() - t0
     return {"n": sim.state.n, "steps": steps, "wall_s": wall, "psps": steps * sim.state.n / wall,
             "ghosts": float(np.mean(ghosts)), "ghost_ms": 1e3 * hook_s["sph_extra_sources"] / steps,
@@ -169,7 +169,7 @@ def _still_water_figures(plugins, relax_s: float, free_s: float) -> dict:
         st = sim.state
         y = st.pos[:, 1]
         below = y < TANK_H - 2 * TANK_DX
-        exact = sim.rho0 * np.linalg.norm(sim.gravity) * (TANK_H - y[below])
+        exact = sim.params.rho0 * np.linalg.norm(sim.params.gravity) * (TANK_H - y[below])
         return float(np.max(np.abs(st.p[below] - exact) / exact))
 
     while sim.t < relax_s:

@@ -139,7 +139,7 @@ def main():
                     print(f"  x{scale:g} {kind:<7} run {r + 1}: {s['n_particles']} particles, {s['steps']} steps, "
                           f"{s['wall_time_s']:.2f} s wall ({s['process_wall_s']:.2f} s process, "
                           f"{s['process_cpu_s']:.2f} s CPU), output calls {s['output_s']:.2f} s, "
-                          f"frames vtu {s.get('vtu_frames', 0)} "
+                          f"frames vtu {s.get('vtu', {}).get('frames', 0)} "
                           f"netcdf {s.get('netcdf_frames', 0)}, {s['output_mb']:.1f} MB", flush=True)
                     if kind not in best or s["wall_time_s"] < best[kind]["wall_time_s"]:
                         best[kind] = s
@@ -151,7 +151,7 @@ def main():
     print(f"{'scale':>5} {'particles':>9} {'steps':>6} {'frames':>6} {'MB':>6} {'with s':>8} {'without s':>9} "
           f"{'share':>6} {'hooks s':>7} {'hooks':>6} {'ms/frame':>8} {'CPU with':>8} {'CPU w/o':>8} {'CPU share':>9}")
     for scale, w, wo in rows:
-        frames = w.get("vtu_frames", 0) + w.get("netcdf_frames", 0)
+        frames = w.get("vtu", {}).get("frames", 0) + w.get("netcdf", {}).get("frames", 0)
         share = (w["wall_time_s"] - wo["wall_time_s"]) / w["wall_time_s"]
         cpu_share = (w["process_cpu_s"] - wo["process_cpu_s"]) / w["process_cpu_s"]
         print(f"{scale:>5g} {w['n_particles']:>9} {w['steps']:>6} {frames:>6} {w['output_mb']:>6.1f} "

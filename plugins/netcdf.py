@@ -109,7 +109,7 @@ class NetcdfWriter(ScheduledWriter):
 
     @hookimpl
     def sph_summary(self, ctx):
-        return {"netcdf_frames": self.row} if self.row else None
+        return {"frames": self.row} if self.row else None
 
     @hookimpl
     def sph_finish(self, ctx):

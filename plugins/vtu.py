@@ -108,7 +108,7 @@ class VtuWriter(ScheduledWriter):
 
     @hookimpl
     def sph_summary(self, ctx):
-        return {"vtu_frames": len(self.frames)} if self.frames else None
+        return {"frames": len(self.frames)} if self.frames else None
 
     @hookimpl
     def sph_finish(self, ctx):

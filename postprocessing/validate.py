@@ -66,9 +66,9 @@ def main(argv=None):
         if case != "dam_break":
             continue
         st = s["status"] if s["status"] == "completed" else f"{s['status']} (t = {s['t']:.3g} s)"
-        lines.append(f"| {case} | {boundary} | {variant} | {st} | {fmt(s.get('x_front_0.10s_m'))} m "
-                     f"({fmt(s.get('err_cruchaga_0.10s'), True)}) | {fmt(s.get('x_front_0.20s_m'))} m "
-                     f"({fmt(s.get('err_cruchaga_0.20s'), True)}) | {fmt(s.get('rms_rel_err_martin_moyce_T3'), True)} "
+        lines.append(f"| {case} | {boundary} | {variant} | {st} | {fmt(s.get('front_gauge', {}).get('x_front_0.10s_m'))} m "
+                     f"({fmt(s.get('front_gauge', {}).get('err_cruchaga_0.10s'), True)}) | {fmt(s.get('front_gauge', {}).get('x_front_0.20s_m'))} m "
+                     f"({fmt(s.get('front_gauge', {}).get('err_cruchaga_0.20s'), True)}) | {fmt(s.get('front_gauge', {}).get('rms_rel_err_martin_moyce_T3'), True)} "
                      f"| {s['wall_time_s']:.1f} | {s['particle_steps_per_s']:.3g} |")
     lines += ["", "| case | boundary | variant | status | particles lost | max displacement (m) | surface drift (m) "
               "| worst layer pressure error (below top 2 layers) | wall s | particle-steps/s |",
@@ -77,9 +77,9 @@ def main(argv=None):
         if case == "dam_break":
             continue
         st = s["status"] if s["status"] == "completed" else f"{s['status']} (t = {s['t']:.3g} s)"
-        lines.append(f"| {case} ({s['t']:.3g} s) | {boundary} | {variant} | {st} | {s.get('particles_lost', '-')} "
-                     f"| {fmt(s.get('max_displacement_m'))} | {fmt(s.get('surface_drift_m'))} "
-                     f"| {fmt(s.get('pressure_max_layer_err'), True)} | {s['wall_time_s']:.1f} "
+        lines.append(f"| {case} ({s['t']:.3g} s) | {boundary} | {variant} | {st} | {s.get('pressure_gauge', {}).get('particles_lost', '-')} "
+                     f"| {fmt(s.get('pressure_gauge', {}).get('max_displacement_m'))} | {fmt(s.get('pressure_gauge', {}).get('surface_drift_m'))} "
+                     f"| {fmt(s.get('pressure_gauge', {}).get('pressure_max_layer_err'), True)} | {s['wall_time_s']:.1f} "
                      f"| {s['particle_steps_per_s']:.3g} |")
     table = "\n".join(lines)
     print("\n" + table)

@@ -21,6 +21,7 @@ from . import defaults
 from .errors import CaseError
 from .geometry import Planes, recession_direction
 from .options import check_value, validate_table
+from .overrides import fold, parse_set
 
 CASE_FILE = "case.toml"
 
@@ -77,31 +78,24 @@ def read_toml(path: Path) -> dict:
         raise CaseError(path, "-", f"cannot read: {e.strerror}") from None
 
 
-def parse_override(text: str) -> tuple[list[str], object]:
-    """``section.key=value`` -> (["section", "key"], value); value is read as TOML."""
-    if "=" not in text:
-        raise CaseError("--set", text, "expected section.key=value")
-    key, raw = text.split("=", 1)
-    path = key.strip().split(".")
-    if len(path) < 2 or not all(path):
-        raise CaseError("--set", key, "expected section.key=value")
-    try:
-        value = tomllib.loads(f"v = {raw}")["v"]
-    except tomllib.TOMLDecodeError:
-        value = raw  # a bare word, e.g. --set kernel.name=cubic_spline
-    return path, value
+def parse_override(text: str) -> tuple[list, object]:
+    """``section.key=value`` (or ``blocks[0].count=...``) -> (path, value); see
+    :mod:`sphcore.overrides`, the one grammar of ``--set`` and ``--vary``."""
+    path, value = parse_set(text)
+    return list(path), value
 
 
 def apply_overrides(raw: dict, overrides) -> dict:
-    """A copy of ``raw`` with each ``section.key=value`` set (sweeps use the same)."""
+    """A copy of ``raw`` with each ``KEY=VALUE`` (text, or a (path, value) pair) set; a key
+    may index an array of tables (``blocks[0].count``). Sweeps use the same."""
     out = copy.deepcopy(raw)
-    for text in overrides or ():
-        path, value = parse_override(text) if isinstance(text, str) else text
+    pairs = [parse_override(t) if isinstance(t, str) else t for t in overrides or ()]
+    for path, value in fold(raw, pairs):
         node = out
         for part in path[:-1]:
             node = node.setdefault(part, {})
             if not isinstance(node, dict):
-                raise CaseError("--set", ".".join(path), "that section is not a table")
+                raise CaseError("--set", ".".join(map(str, path)), "that section is not a table")
         node[path[-1]] = value
     return out
 

@@ -1,4 +1,4 @@
-"""The ``sph`` command: run, check, plugins, sweep (:mod:`sphcore.sweep`).
+"""The ``sph`` command: run, check, plugins, options, sweep (:mod:`sphcore.sweep`).
 
 Exit status: 0 done; 1 the run went unstable or could not write its output (what was
 written is kept); 2 bad input (case, options, output directory), nothing written; 128 + signal number when stopped by SIGINT
@@ -11,11 +11,13 @@ import argparse
 import signal
 import sys
 
+from . import __version__
 from .errors import CaseError, OutputError
 
 
 def _parser():
     p = argparse.ArgumentParser(prog="sph", description="Weakly compressible SPH with pluggable boundaries.")
+    p.add_argument("--version", action="version", version=f"sph (sphcore) {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="run a case directory")
     r.add_argument("case_dir")
@@ -29,12 +31,14 @@ def _parser():
     c = sub.add_parser("check", help="validate a case without running it")
     c.add_argument("case_dir")
     c.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
-    sub.add_parser("plugins", help="list installed plugins and the hooks they implement")
+    sub.add_parser("plugins", help="list installed plugins, the hooks they implement, and broken ones")
+    o = sub.add_parser("options", help="every case key with its default, unit and meaning")
+    o.add_argument("plugin", nargs="?", help="only this plugin's tables (or 'core')")
     _sweep_parser(sub)
     return p
 
 
-# -- sph sweep: the grid of variants on Dask lives in sphcore/sweep.py -------------------
+# -- sph sweep: the grid of variants on Dask lives in sphcore/sweep/ ----------------------
 def _sweep_parser(sub):
     w = sub.add_parser("sweep", help="run a grid of case variants on Dask, gather them in sweep.nc",
                        description="Run every combination of the --vary values as a Dask task; write "
@@ -54,8 +58,8 @@ def _sweep_parser(sub):
     w.add_argument("--workers", type=int, help="local cluster size (default: one per core)")
     w.add_argument("--timeout", type=float, metavar="SECONDS", help="stop a variant after this wall time (status "
                    "'timeout', checkpoint written)")
-    w.add_argument("--error", metavar="KEY", help="summary key plotted against wall time (default: the first of "
-                   "err_cruchaga_0.20s, rms_rel_err_martin_moyce_T3, pressure_max_layer_err present)")
+    w.add_argument("--error", metavar="KEY", help="summary key plotted against wall time, as plugin.figure "
+                   "(default: the first figure named err* or rms* that a variant reported)")
     w.add_argument("--progress", choices=("auto", "bar", "log", "off"))
     w.add_argument("--dry-run", action="store_true", help="validate and list the variants, run nothing")
 
@@ -76,15 +80,19 @@ def main(argv=None) -> int:
     try:
         if args.command == "plugins":
             for row in pluginhost.describe():
-                print(f"{row['name']:<16} {row['dist']} {row['version']}  hooks: {', '.join(row['hooks'])}")
+                what = f"BROKEN: {row['broken']}" if row["broken"] else f"hooks: {', '.join(row['hooks'])}"
+                print(f"{row['name']:<16} {row['dist']} {row['version']}  {what}")
             return 0
+        if args.command == "options":
+            return _options(args.plugin)
         if args.command == "check":
             case, pm = runner.load(args.case_dir, args.overrides)
             from .simulation import Simulation
 
             sim = Simulation(case, pm)  # particles, sound speed and plugin set-up, no step
+            prm = sim.params
             print(f"{case.file}: ok: {case.dim}D, {sim.state.n} particles, {case.planes.count} wall planes, "
-                  f"h = {sim.h:.4g} m, c0 = {sim.c0:.4g} m/s, "
+                  f"h = {prm.h:.4g} m, c0 = {prm.c0:.4g} m/s, "
                   f"plugins: {', '.join(case.config['plugins']['use']) or 'none'}")
             return 0
         summary = runner.run(args.case_dir, args.output, args.overrides, args.t_end, args.overwrite,
@@ -96,13 +104,39 @@ def main(argv=None) -> int:
     status = summary["status"]
     print(f"{summary['case']}: {status}: t = {summary['t']:.6g} s, {summary['steps']} steps, "
           f"{summary['n_particles']} particles, {summary['wall_time_s']:.2f} s wall, "
-          f"{summary['particle_steps_per_s']:.3g} particle-steps/s, escaped {summary['escaped']}, "
+          f"{summary['particle_steps_per_s']:.3g} particle-steps/s, "
           f"peak memory {summary['peak_memory_mb']:.0f} MB")
+    print(f"{summary['case']}: wrote {summary['output_dir']}")
     if status in ("unstable", "output_error"):
         return _fail(summary["message"], 1)
     if status == "stopped":
         print(f"sph: {summary['message']}", file=sys.stderr)
         return 128 + int(summary.get("_signum") or signal.SIGINT)
+    return 0
+
+
+def _options(only=None) -> int:
+    """Print every case key: the core's tables and each usable plugin's."""
+    from . import defaults, pluginhost
+    from .options import Option
+
+    tables = {("core", k): v for k, v in defaults.CORE.items()}
+    tables.update({("core", "blocks[]"): defaults.BLOCK, ("core", "domain.planes[]"): defaults.PLANE})
+    for name, info in sorted(pluginhost.available().items()):
+        if not info.error:
+            tables.update({(name, t): schema for t, schema in (info.tables or {}).items()})
+    owners = {o for o, _ in tables}
+    if only is not None and only not in owners:
+        return _fail(f"no plugin {only!r} (known: {', '.join(sorted(owners))})", 2)
+    for (owner, table), schema in tables.items():
+        if only is not None and owner != only:
+            continue
+        rows = schema.items() if isinstance(schema, dict) else [("", schema)]
+        print(f"[{table}]" + ("" if owner == "core" else f"  (plugin {owner})"))
+        for key, opt in rows:
+            if isinstance(opt, Option):
+                default = "derived" if opt.default is None else repr(opt.default)
+                print(f"  {key or table:<18} = {default:<12} {opt.describe()}")
     return 0
 
 

@@ -59,9 +59,19 @@ def _one_line(e: Exception) -> str:
 
 
 def _tables_of(plugin) -> dict:
-    """The case tables an instance declares through ``sph_options`` (called directly)."""
+    """The case tables an instance declares through ``sph_options`` (called directly),
+    checked to be {table: {key: Option}}."""
+    from .options import Option
+
     declare = getattr(plugin, "sph_options", None)
-    return dict(declare() or {}) if declare else {}
+    tables = declare() if declare else None
+    tables = {} if tables is None else tables
+    if not isinstance(tables, dict) or not all(
+            isinstance(t, str) and isinstance(body, dict)
+            and all(isinstance(k, str) and isinstance(o, Option) for k, o in body.items())
+            for t, body in tables.items()):
+        raise TypeError("sph_options must return {table: {key: sphcore.api.Option}}")
+    return dict(tables)
 
 
 def _inspect(name, value, dist, version, load) -> PluginInfo:

@@ -274,7 +274,7 @@ def test_set_overrides_are_applied(good_case):
     assert case.config["viscosity"]["alpha"] == 0.0
     assert case.gravity.tolist() == [0.0, -1.0, 0.0]
     sim = make_sim(good_case, ["kernel.name=cubic_spline", "eos.c0=12.5"])
-    assert sim.kernel_id == CUBIC_SPLINE and sim.c0 == 12.5
+    assert sim.params.kernel_id == CUBIC_SPLINE and sim.params.c0 == 12.5
     # the file on disk is untouched
     assert "cubic_spline" not in (good_case / "case.toml").read_text()
 

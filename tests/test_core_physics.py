@@ -24,7 +24,7 @@ def test_spheres_without_sph_run_no_sph_kernel(tmp_path):
     summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert summary["status"] == "completed"
     sim = summary["_sim"]
-    assert sim.drho is None and sim.c0 == 0.0
+    assert not sim.params.sph and sim.params.c0 == 0.0
     counters = summary["counters"]
     for name in SPH_KERNELS:
         assert counters.get(name, 0) == 0, name
@@ -50,7 +50,7 @@ def test_spheres_without_sph_run_no_sph_kernel(tmp_path):
 def test_fluid_runs_only_the_terms_it_has(good_case, alpha, beta, nu, delta, expect):
     sim = make_sim(good_case, [f"viscosity.alpha={alpha}", f"viscosity.beta={beta}", f"fluid.nu={nu}",
                                f"density_diffusion.delta={delta}"])
-    assert sim.drho is not None
+    assert sim.integrator.evolves_density
     steps = len(run_to_end(sim))
     rates = sim.counters["rates"]
     assert rates == steps + 1
@@ -120,7 +120,7 @@ def test_first_step_respects_the_force_limit(tmp_path):
     case_dir = spheres(tmp_path, velocity=(0.01, 0.0), gravity=(0.0, -9.81), t_end=0.1, dt=None)
     sim = make_sim(case_dir)
     sim.advance()
-    h = sim.h
+    h = sim.params.h
     assert sim.dt == pytest.approx(min(0.25 * math.sqrt(h / 9.81), 0.2 * h / 0.01), rel=1e-12)
 
 

@@ -25,8 +25,7 @@ GOOD_PLUGIN = '''
 """A throwaway sphcore plugin, written by the test suite."""
 import numpy as np
 
-from sphcore.hookspecs import hookimpl
-from sphcore.options import Option
+from sphcore.api import Option, hookimpl
 
 
 class Throwaway:
@@ -47,27 +46,66 @@ class Throwaway:
         self.fail_at_step = case.config["throwaway"]["fail_at_step"]
 
     @hookimpl
-    def sph_accelerations(self, sim, acc):
+    def sph_accelerations(self, ctx, acc):
         acc += self.accel
 
     @hookimpl
-    def sph_after_step(self, sim):
+    def sph_after_step(self, ctx):
         self.after_step_calls += 1
-        sim.stats["throwaway_after_step"] = self.after_step_calls
-        if sim.step == self.fail_at_step:
+        ctx.stats(self)["after_step"] = self.after_step_calls
+        if ctx.step == self.fail_at_step:
             raise RuntimeError("throwaway plugin failed on purpose")
 '''
 
 BAD_PLUGIN = '''
 """A throwaway sphcore plugin with a misspelt hook."""
-from sphcore.hookspecs import hookimpl
+from sphcore.api import hookimpl
 
 
 class Misspelt:
     @hookimpl
-    def sph_after_stepp(self, sim):
+    def sph_after_stepp(self, ctx):
         pass
 '''
+
+#: broken variants of a third-party plugin: (module source, what its error line must say)
+BROKEN = {
+    "bad_hook_name": (BAD_PLUGIN.replace("Misspelt", "Broken"), "sph_after_stepp"),
+    "bad_argument": ('''
+from sphcore.api import hookimpl
+
+
+class Broken:
+    @hookimpl
+    def sph_after_step(self, simulation):
+        pass
+''', "simulation"),
+    "import_error": ('''
+import numpy_that_does_not_exist
+
+
+class Broken:
+    pass
+''', "numpy_that_does_not_exist"),
+    "option_error": ('''
+from sphcore.api import hookimpl
+
+
+class Broken:
+    @hookimpl
+    def sph_options(self):
+        return {"broken": {"k": 1.0}}  # not an Option: a bug in the plugin
+''', "sph_options"),
+    "configure_crash": ('''
+from sphcore.api import hookimpl
+
+
+class Broken:
+    @hookimpl
+    def sph_configure(self, case):
+        raise ZeroDivisionError("a bug in sph_configure")
+''', "sph_configure"),
+}
 
 FREE_CASE = """
 [case]
@@ -146,7 +184,7 @@ def misspelt(site):
 def test_installed_plugin_is_described(throwaway, capsys):
     rows = {row["name"]: row for row in pluginhost.describe()}
     assert rows["throwaway"] == {
-        "name": "throwaway", "dist": "throwaway-sph", "version": "0.1",
+        "name": "throwaway", "dist": "throwaway-sph", "version": "0.1", "tables": ["throwaway"], "broken": "",
         "hooks": ["sph_accelerations", "sph_after_step", "sph_configure", "sph_options"],
     }
     assert cli.main(["plugins"]) == 0
@@ -168,14 +206,15 @@ def test_plugin_acceleration_moves_free_particles(throwaway, tmp_path):
     sim = summary["_sim"]
     assert sim.t == 0.5 and summary["steps"] == 50
     # no SPH: no neighbour search, no density, only the plugin's acceleration
-    assert sim.counters["neighbour_search"] == 0 and sim.drho is None
+    assert sim.counters["neighbour_search"] == 0 and sim.counters["continuity"] == 0
     start = by_id(make_sim(case_dir).state)
     end = by_id(sim.state)
     a, v0, t = np.array([1.5, -2.0]), np.array([0.25, -0.5]), sim.t
     np.testing.assert_allclose(end["pos"], start["pos"] + v0 * t + 0.5 * a * t * t, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(end["vel"], np.broadcast_to(v0 + a * t, end["vel"].shape), rtol=1e-12, atol=1e-12)
-    # sph_after_step fired once per step
-    assert sim.stats["throwaway_after_step"] == summary["steps"] == 50
+    # sph_after_step fired once per step; the plugin's stats are in the summary under its name
+    assert summary["throwaway"]["after_step"] == summary["steps"] == 50
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["throwaway"] == {"after_step": 50}
 
 
 def test_unselected_plugin_does_nothing(throwaway, tmp_path):
@@ -185,7 +224,7 @@ def test_unselected_plugin_does_nothing(throwaway, tmp_path):
     while not sim.done():
         sim.advance()
     assert np.all(sim.state.vel == np.array([0.25, -0.5]))  # no acceleration at all
-    assert "throwaway_after_step" not in sim.stats
+    assert "throwaway" not in sim.ctx.all_stats()
 
 
 def test_unknown_key_in_plugin_table(throwaway, tmp_path, capsys):
@@ -227,7 +266,7 @@ def test_each_run_gets_fresh_plugin_instances(throwaway, tmp_path):
     case_dir = write_case(tmp_path / "free", FREE_CASE)
     first = runner.run(case_dir, output=tmp_path / "a", quiet=True)
     second = runner.run(case_dir, output=tmp_path / "b", quiet=True)
-    assert first["_sim"].stats["throwaway_after_step"] == second["_sim"].stats["throwaway_after_step"] == 50
+    assert first["throwaway"]["after_step"] == second["throwaway"]["after_step"] == 50
 
 
 def test_misspelt_hook_fails_at_start_up(misspelt, tmp_path, capsys):
@@ -237,6 +276,7 @@ def test_misspelt_hook_fails_at_start_up(misspelt, tmp_path, capsys):
         runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert "sph_after_stepp" in str(info.value)
     assert "plugin 'throwaway_bad'" in str(info.value)  # names the plugin by its entry-point name
+    assert "throwaway-bad-sph" in str(info.value)  # and its distribution
     assert not (tmp_path / "out").exists()
     status = cli.main(["run", str(case_dir)])
     err = capsys.readouterr().err.strip()
@@ -253,10 +293,31 @@ def test_misspelt_plugin_spoils_no_other_run(misspelt, tmp_path):
     assert summary["status"] == "completed"
 
 
-def test_misspelt_plugin_is_listed_as_broken(misspelt):
+def test_misspelt_plugin_is_listed_as_broken(misspelt, capsys):
     rows = {row["name"]: row for row in pluginhost.describe()}
-    assert rows["throwaway_bad"]["hooks"][0].startswith("BROKEN")
-    assert "sph_after_stepp" in rows["throwaway_bad"]["hooks"][0]
+    assert "sph_after_stepp" in rows["throwaway_bad"]["broken"] and rows["throwaway_bad"]["hooks"] == []
+    assert cli.main(["plugins"]) == 0
+    line = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("throwaway_bad ")]
+    assert len(line) == 1 and "BROKEN" in line[0] and "throwaway-bad-sph" in line[0]
+
+
+@pytest.mark.parametrize("variant", sorted(BROKEN))
+def test_broken_third_party_plugin_is_one_line_and_its_own_fault(site, tmp_path, capsys, variant):
+    """Each way a third-party plugin can be broken: the case that selects it gets one line
+    naming the plugin and its distribution (exit 2, nothing written); other cases run."""
+    source, says = BROKEN[variant]
+    install(site, "throwaway_broken", source, "throwaway-broken", "[sphcore]\nbroken = throwaway_broken:Broken\n")
+    pluginhost.refresh()
+    free = FREE_CASE.replace("[throwaway]\naccel = [1.5, -2.0]\n", "")
+    case_dir = write_case(tmp_path / "uses", free.replace('use = ["throwaway"]', 'use = ["broken"]'))
+    assert cli.main(["run", str(case_dir)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "'broken'" in err and "throwaway-broken" in err and says in err, err
+    assert not (case_dir / "output").exists()
+    assert cli.main(["check", str(case_dir)]) == 2
+    other = write_case(tmp_path / "other", free.replace('use = ["throwaway"]', "use = []"))
+    assert cli.main(["run", str(other), "--output", str(tmp_path / "other_out")]) == 0
 
 
 def test_summary_of_a_crashed_run_does_not_say_completed(throwaway, tmp_path):

@@ -84,15 +84,15 @@ def test_adaptive_dt_is_acoustic_at_rest(good_case):
     sim = make_sim(good_case)
     cfg = sim.case.config["time"]
     g = 9.81
-    assert sim.c0 == pytest.approx(10.0 * math.sqrt(2.0 * g * 0.2), rel=1e-12)  # H = 10 dx
+    assert sim.params.c0 == pytest.approx(10.0 * math.sqrt(2.0 * g * 0.2), rel=1e-12)  # H = 10 dx
     for _ in range(6):
         vmax = float(np.sqrt(np.max(np.sum(sim.state.vel**2, axis=1))))
-        amax = float(np.sqrt(np.max(np.sum(sim.acc**2, axis=1))))
+        amax = float(np.sqrt(np.max(np.sum(sim.integrator.acc**2, axis=1))))
         sim.advance()
-        acoustic = cfg["cfl"] * sim.h / (sim.c0 + vmax)
+        acoustic = cfg["cfl"] * sim.params.h / (sim.params.c0 + vmax)
         assert sim.dt == pytest.approx(acoustic, rel=1e-14)
         if amax > 0:
-            assert cfg["force_factor"] * math.sqrt(sim.h / amax) > acoustic  # the acoustic limit binds
+            assert cfg["force_factor"] * math.sqrt(sim.params.h / amax) > acoustic  # the acoustic limit binds
     assert sim.step == 6 and np.max(np.abs(sim.state.vel)) > 0  # the block is falling
     # the Courant number scales the step
     half = make_sim(good_case, ["time.cfl=0.1"])
@@ -106,7 +106,7 @@ def test_viscous_limit_and_dt_max(good_case):
     nu = 1.0  # m^2/s: the viscous limit 0.125 h^2 / nu binds
     sim = make_sim(good_case, [f"fluid.nu={nu}"])
     sim.advance()
-    assert sim.dt == pytest.approx(0.125 * sim.h**2 / nu, rel=1e-14)
+    assert sim.dt == pytest.approx(0.125 * sim.params.h**2 / nu, rel=1e-14)
     capped = make_sim(good_case, ["time.dt_max=1e-5"])
     capped.advance()
     assert capped.dt == 1e-5
@@ -144,7 +144,7 @@ def test_restart_is_bit_for_bit(tmp_path):
     for name in sa:
         assert np.array_equal(sa[name], sb[name]), name
     ia, ib = np.argsort(a.state.id), np.argsort(b.state.id)
-    assert np.array_equal(a.acc[ia], b.acc[ib]) and np.array_equal(a.drho[ia], b.drho[ib])
+    assert np.array_equal(a.integrator.acc[ia], b.integrator.acc[ib]) and np.array_equal(a.integrator.drho[ia], b.integrator.drho[ib])
     # the state did evolve: the comparison is not between two copies of the initial state
     assert not np.array_equal(sa["pos"], by_id(make_sim(case_dir).state)["pos"])
 

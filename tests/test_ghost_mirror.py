@@ -11,7 +11,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from sphcore.equations import tait_pressure
+from sphcore.eos import fill_pressure as tait_pressure
 from sphcore.geometry import Planes
 from sphcore.particles import FLUID, SPHERE
 from sphcore_plugins.ghost.mirror import (

@@ -63,13 +63,13 @@ def test_sources_follow_the_current_particle_order(tmp_path):
     sim.state.vel[:] = np.random.default_rng(0).normal(size=sim.state.vel.shape)
     plugin = sim.pm.get_plugin("ghost")
     sim.state.permute(np.random.default_rng(1).permutation(sim.state.n))  # as a reorder does
-    src = plugin.sph_extra_sources(sim)
+    src = plugin.sph_extra_sources(sim.ctx)
     i = plugin.mirror.source_index
     st = sim.state
     d = sim.case.planes.distances(st.pos[i])
     # each ghost is the image of the particle now at row i, across a plane it is near
     dist_ghost = np.linalg.norm(src.pos - st.pos[i], axis=1)
-    assert np.all(dist_ghost <= 2 * SUPPORT * sim.h * np.sqrt(2)) and np.all(dist_ghost > 0)
+    assert np.all(dist_ghost <= 2 * SUPPORT * sim.params.h * np.sqrt(2)) and np.all(dist_ghost > 0)
     np.testing.assert_array_equal(src.vel, -st.vel[i])  # no slip
     np.testing.assert_array_equal(src.m, st.m[i])
     assert (d.min(axis=1) > 0).all() and (sim.case.planes.distances(src.pos).min(axis=1) < 0).all()
@@ -82,7 +82,7 @@ def test_3d_box_runs_and_counts_face_edge_and_vertex_images(tmp_path):
     # 5 walls touch the water (the lid is far): per wall face 3 layers x n x n images,
     # per wall-wall edge (4 floor edges + 4 vertical edges) 3 x 3 x n, per floor vertex 27
     expect = 5 * 3 * n * n + 8 * 9 * n + 4 * 27
-    assert summary["ghosts_last"] == expect
+    assert summary["ghost"]["ghosts_last"] == expect
     sim = summary["_sim"]
     assert sim.counters["extra_sources"] == sim.counters["rates"] > 0
     # a few steps of water at rest: nothing moved through a wall
@@ -91,8 +91,8 @@ def test_3d_box_runs_and_counts_face_edge_and_vertex_images(tmp_path):
 
 def test_summary_reports_ghost_counts(tmp_path):
     summary = runner.run(box_case(tmp_path / "s"), quiet=True)
-    assert summary["ghosts_max"] >= summary["ghosts_last"] > 0
-    assert summary["ghost_reallocations"] >= 1
+    assert summary["ghost"]["ghosts_max"] >= summary["ghost"]["ghosts_last"] > 0
+    assert summary["ghost"]["ghost_reallocations"] >= 1
 
 
 def test_switching_wall_treatment_is_one_line(tmp_path):

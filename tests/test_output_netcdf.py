@@ -60,7 +60,7 @@ def advance(sim, rng):
 def configured(sim):
     w = NetcdfWriter()
     w.sph_configure(case=sim.case)
-    w.sph_setup(sim=sim)
+    w.sph_setup(ctx=sim)
     return w
 
 
@@ -82,14 +82,14 @@ def run(sim, rng, writer, steps, finish=True):
     if _writes(writer, sim, final=True):
         frames.append(by_id(sim))
     if finish:
-        writer.sph_finish(sim=sim)
+        writer.sph_finish(ctx=sim)
     return frames
 
 
 def _writes(writer, sim, final):
     """Call sph_output; True when it appended a frame (a restart's reopen also moves ``row``)."""
     before = writer.schedule.frames
-    writer.sph_output(sim=sim, final=final)
+    writer.sph_output(ctx=sim, final=final)
     return writer.schedule.frames > before
 
 
@@ -153,8 +153,8 @@ def test_frames_are_on_disk_while_the_run_goes_on(tmp_path):
     res = subprocess.run([sys.executable, "-c", code, str(w.path)], capture_output=True, text=True, timeout=60)
     assert res.returncode == 0, res.stderr
     assert int(res.stdout) == len(frames) == 4
-    w.sph_finish(sim=sim)
-    w.sph_finish(sim=sim)  # idempotent
+    w.sph_finish(ctx=sim)
+    w.sph_finish(ctx=sim)  # idempotent
 
 
 def test_no_frame_due_opens_no_file(tmp_path):
@@ -162,10 +162,10 @@ def test_no_frame_due_opens_no_file(tmp_path):
     w = configured(sim)
     for _ in range(4):  # steps 1..4: none due (step 0 output was not called)
         advance(sim, rng)
-        w.sph_output(sim=sim, final=False)
-    w.sph_finish(sim=sim)
+        w.sph_output(ctx=sim, final=False)
+    w.sph_finish(ctx=sim)
     assert os.listdir(sim.output_dir) == []
-    assert w.sph_summary(sim=sim) is None
+    assert w.sph_summary(ctx=sim) is None
 
 
 def test_both_schedule_keys_is_a_case_error(tmp_path):
@@ -178,12 +178,12 @@ def test_both_schedule_keys_is_a_case_error(tmp_path):
 def test_changed_particle_set_is_an_output_error(tmp_path):
     sim, rng = make_sim(tmp_path, every_steps=1)
     w = configured(sim)
-    w.sph_output(sim=sim, final=False)
+    w.sph_output(ctx=sim, final=False)
     sim.state.append(make_block(np.zeros((1, 2)), [0.0, 0.0], 1000.0, 0.25, 0.1, FLUID))
     sim.step += 1
     with pytest.raises(OutputError, match="particles.nc: the set of particles changed"):
-        w.sph_output(sim=sim, final=False)
-    w.sph_finish(sim=sim)
+        w.sph_output(ctx=sim, final=False)
+    w.sph_finish(ctx=sim)
 
 
 @pytest.mark.parametrize("output_at_restart_step", [False, True])
@@ -207,7 +207,7 @@ def test_restart_drops_later_frames_and_appends(tmp_path, output_at_restart_step
             second.append(by_id(sim))
     if _writes(w, sim, final=True):
         second.append(by_id(sim))
-    w.sph_finish(sim=sim)
+    w.sph_finish(ctx=sim)
     assert [f["step"] for f in second] == [6, 7]
     frames = first[:3] + second
     with xr.open_dataset(sim.output_dir / "particles.nc") as ds:
@@ -231,7 +231,7 @@ def test_killed_run_keeps_synced_frames(tmp_path):
         w = NetcdfWriter()
         for i in range(3):
             sim.t, sim.step = 0.01 * i, i
-            w.sph_output(sim=sim, final=False)
+            w.sph_output(ctx=sim, final=False)
         os.kill(os.getpid(), signal.SIGKILL)  # no close, no finish
     """)
     res = subprocess.run([sys.executable, "-c", child, str(sim.output_dir)], timeout=60)
@@ -245,7 +245,7 @@ def test_unwritable_output_is_an_output_error(tmp_path):
     sim, _ = make_sim(tmp_path)
     (sim.output_dir / "particles.nc").mkdir()  # something that cannot be opened as a file
     with pytest.raises(OutputError, match="particles.nc: cannot create"):
-        configured(sim).sph_output(sim=sim, final=False)
+        configured(sim).sph_output(ctx=sim, final=False)
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root may write to a read-only directory")
@@ -254,7 +254,7 @@ def test_read_only_directory_is_an_output_error(tmp_path):
     sim.output_dir.chmod(0o500)
     try:
         with pytest.raises(OutputError, match="particles.nc: cannot create.*Permission denied"):
-            configured(sim).sph_output(sim=sim, final=False)
+            configured(sim).sph_output(ctx=sim, final=False)
     finally:
         sim.output_dir.chmod(0o700)
 
@@ -282,11 +282,11 @@ def test_disk_full_keeps_earlier_frames_readable(tmp_path):
             for i in range(100):
                 sim.t, sim.step = 0.01 * i, i
                 st.p[:] = i
-                w.sph_output(sim=sim, final=False)
+                w.sph_output(ctx=sim, final=False)
         except OutputError as err:
             print("OutputError:", err)
-        w.sph_output(sim=sim, final=True)  # silent after the failure, no second error
-        w.sph_finish(sim=sim)
+        w.sph_output(ctx=sim, final=True)  # silent after the failure, no second error
+        w.sph_finish(ctx=sim)
         print("rows", w.row)
     """)
     res = subprocess.run([sys.executable, "-c", child, str(out)], capture_output=True, text=True, timeout=120)

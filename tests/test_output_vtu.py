@@ -64,21 +64,21 @@ def run(sim, rng, writer, steps):
         if i:
             advance(sim, rng)
         before = len(writer.frames)
-        writer.sph_output(sim=sim, final=False)
+        writer.sph_output(ctx=sim, final=False)
         if len(writer.frames) > before:
             expected[sim.t] = by_id(sim.state)
     before = len(writer.frames)
-    writer.sph_output(sim=sim, final=True)
+    writer.sph_output(ctx=sim, final=True)
     if len(writer.frames) > before:
         expected[sim.t] = by_id(sim.state)
-    writer.sph_finish(sim=sim)
+    writer.sph_finish(ctx=sim)
     return expected
 
 
 def configured(sim):
     w = VtuWriter()
     w.sph_configure(case=sim.case)
-    w.sph_setup(sim=sim)
+    w.sph_setup(ctx=sim)
     return w
 
 
@@ -125,8 +125,8 @@ def test_no_frame_due_writes_no_file(tmp_path):
     w = configured(sim)
     for _ in range(4):  # steps 1..4: none due (step 0 output was not called)
         advance(sim, rng)
-        w.sph_output(sim=sim, final=False)
-    w.sph_finish(sim=sim)
+        w.sph_output(ctx=sim, final=False)
+    w.sph_finish(ctx=sim)
     assert os.listdir(sim.output_dir) == []
 
 
@@ -155,11 +155,11 @@ def test_restart_drops_later_frames_and_continues(tmp_path, output_at_restart_st
     assert (sim.output_dir / PVD).read_text() == pvd_before  # nothing touched yet
     sim.step, sim.t = 4, t4
     if output_at_restart_step:  # a core that also writes at the restart point
-        w.sph_output(sim=sim, final=False)
+        w.sph_output(ctx=sim, final=False)
     for _ in range(3):  # steps 5, 6, 7
         advance(sim, rng)
-        w.sph_output(sim=sim, final=False)
-    w.sph_output(sim=sim, final=True)
+        w.sph_output(ctx=sim, final=False)
+    w.sph_output(ctx=sim, final=True)
     times, frames = read_all(sim.output_dir / PVD)
     assert len(times) == 5  # steps 0, 2, 4 kept; 6 and 7 (final) new
     assert times[:3] == [0.0, 2 * sim.dt, t4] and times[-1] == sim.t
@@ -171,7 +171,7 @@ def test_unwritable_output_is_an_output_error(tmp_path):
     sim, rng = make_sim(tmp_path)
     (sim.output_dir / "vtu").write_text("a file where the frame directory should be")
     with pytest.raises(OutputError) as err:
-        configured(sim).sph_output(sim=sim, final=False)
+        configured(sim).sph_output(ctx=sim, final=False)
     assert "vtu" in str(err.value)
 
 
@@ -181,7 +181,7 @@ def test_read_only_directory_is_an_output_error(tmp_path):
     sim.output_dir.chmod(0o500)
     try:
         with pytest.raises(OutputError, match="Permission denied"):
-            configured(sim).sph_output(sim=sim, final=False)
+            configured(sim).sph_output(ctx=sim, final=False)
     finally:
         sim.output_dir.chmod(0o700)
 
@@ -206,11 +206,11 @@ CHILD = textwrap.dedent("""
                                    [0.0, 0.0], 1000.0, 0.1, 0.05, 0)
             sim.state.p[:] = i
             sim.t, sim.step = 0.01 * i, i
-            w.sph_output(sim=sim, final=False)
+            w.sph_output(ctx=sim, final=False)
     except OutputError as err:
         print("OutputError:", err)
-        w.sph_output(sim=sim, final=True)  # silent after the failure, no second error
-        w.sph_finish(sim=sim)
+        w.sph_output(ctx=sim, final=True)  # silent after the failure, no second error
+        w.sph_finish(ctx=sim)
         print("frames", len(w.frames))
 """)
 

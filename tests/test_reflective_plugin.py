@@ -8,6 +8,7 @@ import pluggy
 import pytest
 
 from sphcore import hookspecs
+from sphcore.context import RunContext
 from sphcore.errors import CaseError
 from sphcore.geometry import Planes
 from sphcore.options import validate_table
@@ -31,13 +32,16 @@ def schema(pm):
 
 
 def make_case(pm, table, planes):
-    cfg = {"reflective": validate_table(schema(pm), table, "case.toml", "reflective")}
+    """The part of a validated case the plugin reads (its table, the planes, the file);
+    planes alone may bound no region here, which a full case would refuse."""
+    cfg = {"reflective": validate_table(schema(pm), table, "case.toml", "reflective"), "time": {"t_end": 1.0}}
     return SimpleNamespace(config=cfg, planes=planes, file="case.toml")
 
 
 def make_sim(case, pos, radius):
+    """A real run context of those particles (no Simulation: the hooks are called directly)."""
     state = make_block(pos, np.zeros(pos.shape[1]), 1000.0, 2 * radius, radius, FLUID)
-    return SimpleNamespace(state=state, case=case, stats={}, t=0.0, step=0, dt=1e-3)
+    return RunContext(case, None, state, plugin_name=lambda plugin: "reflective")
 
 
 def test_entry_point_loads_the_plugin():
@@ -69,9 +73,9 @@ def test_setup_rejects_a_particle_outside():
     pm, _ = manager()
     case = make_case(pm, {}, Planes.box([0, 0], [1, 1]))
     pm.hook.sph_configure(case=case)
-    pm.hook.sph_setup(sim=make_sim(case, lattice([0, 0], [1, 1], 0.1), 0.05))  # touching: fine
+    pm.hook.sph_setup(ctx=make_sim(case, lattice([0, 0], [1, 1], 0.1), 0.05))  # touching: fine
     with pytest.raises(CaseError, match="overlaps a wall"):
-        pm.hook.sph_setup(sim=make_sim(case, np.array([[0.5, 0.5], [0.5, 0.04]]), 0.05))
+        pm.hook.sph_setup(ctx=make_sim(case, np.array([[0.5, 0.5], [0.5, 0.04]]), 0.05))
 
 
 def test_step_hook_reflects_counts_and_survives_reordering():
@@ -82,7 +86,7 @@ def test_step_hook_reflects_counts_and_survives_reordering():
     r = 0.025
     pos0 = lattice([0, 0, 0], [1, 1, 1], 2 * r)
     sim = make_sim(case, pos0, r)
-    pm.hook.sph_setup(sim=sim)
+    pm.hook.sph_setup(ctx=sim)
     rng = np.random.default_rng(0)
     total_hit = total_guard = 0
     for step in range(5):
@@ -93,20 +97,21 @@ def test_step_hook_reflects_counts_and_survives_reordering():
         pos = pos0 + dt * (vel + dt / 2 * acc)
         out = outside(pos, r, planes)
         pos_before, acc_before, pos0_before = pos.copy(), acc.copy(), pos0.copy()
-        pm.hook.sph_after_integrate(sim=sim, pos0=pos0, pos=pos, vel=vel, acc=acc, dt=dt)
+        pm.hook.sph_after_integrate(ctx=sim, pos0=pos0, pos=pos, vel=vel, acc=acc, dt=dt)
         assert np.array_equal(pos0, pos0_before) and np.array_equal(acc, acc_before)
         assert not outside(pos, r, planes).any()
         assert np.array_equal(pos[~out], pos_before[~out])
         total_hit += int(out.sum())
         total_guard += int(np.count_nonzero(plugin._guarded))
-        assert sim.stats["reflected"] == total_hit and sim.stats["escaped"] == total_guard
+        stats = sim.stats("reflective")
+        assert stats["reflected_particle_steps"] == total_hit and stats["guard_returns"] == total_guard
         # between steps the core may reorder the particles and change their number
         keep = rng.permutation(n)[: n - 7 * (step % 2)]
         pos0 = np.ascontiguousarray(pos[keep])
         sim.state.radius = np.ascontiguousarray(sim.state.radius[keep])
     assert total_hit > 0 and total_guard > 0  # max_reflections = 3 needs the guard
-    (summary,) = pm.hook.sph_summary(sim=sim)
-    assert summary["escaped"] == total_guard and summary["reflections"] == total_hit
+    summary = sim.all_stats()["reflective"]  # what the run summary gets under "reflective"
+    assert summary["guard_returns"] == total_guard and summary["reflected_particle_steps"] == total_hit
     assert summary["reflection_events"] >= total_hit
 
 
@@ -122,7 +127,7 @@ def test_end_point_velocity_option():
         pos0, vel, acc = np.array([[0.0, 0.06]]), np.array([[0.0, -2.0]]), np.array([[0.0, -9.81]])
         pos = pos0 + 0.01 * (vel + 0.005 * acc)
         v_end = vel + 0.01 * acc
-        pm.hook.sph_after_integrate(sim=sim, pos0=pos0, pos=pos, vel=v_end, acc=acc, dt=0.01)
+        pm.hook.sph_after_integrate(ctx=sim, pos0=pos0, pos=pos, vel=v_end, acc=acc, dt=0.01)
         res[mode] = v_end[0, 1]
     assert res["end"] == pytest.approx(2.0981)  # Eq. 2 at the end point: -(-2.0981)
     assert res["contact"] < res["end"]  # gravity's work between contact and mirror point

@@ -275,17 +275,17 @@ def test_summary_of_a_completed_run(reference):
     out, process_wall = reference
     s = summary_of(out)
     assert s["status"] == "completed" and s["message"] == "" and s["t"] == T_END
-    for key in ("wall_time_s", "steps", "n_particles", "particle_steps_per_s", "escaped", "peak_memory_mb"):
+    for key in ("wall_time_s", "steps", "n_particles", "particle_steps_per_s", "peak_memory_mb"):
         assert isinstance(s[key], (int, float)) and not isinstance(s[key], bool), key
         assert math.isfinite(s[key]), key
-    for key in ("steps", "n_particles", "escaped"):
+    for key in ("steps", "n_particles"):
         assert isinstance(s[key], int), key
     assert 0.0 < s["wall_time_s"] < process_wall  # the stepping, without the interpreter's start
     assert s["n_particles"] == N
     # ~T_END / (0.2 h / c0) acoustic steps: h = 0.013 m, c0 = 10 sqrt(2 g 0.24 m) = 21.7 m/s
     assert 1000 < s["steps"] < 10_000
     assert s["particle_steps_per_s"] == pytest.approx(s["steps"] * N / s["wall_time_s"], rel=1e-12)
-    assert s["escaped"] == 0
+    assert s["reflective"]["guard_returns"] == 0
     assert 20.0 < s["peak_memory_mb"] < 8192.0  # numba + vtk + netCDF loaded, 288 particles
 
 

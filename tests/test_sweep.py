@@ -2,7 +2,7 @@
 Dask whose sweep.nc must agree with every variant's own summary.json.
 
 The real sweeps run a 10 x 10 block of water for a few milliseconds; each variant is a
-fresh Python process (see sphcore/sweep_task.py), about 2-4 s on two cores.
+fresh Python process (see sphcore/sweep/task.py), about 2-4 s on two cores.
 """
 
 from __future__ import annotations
@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 from conftest import write_case
 
-from sphcore import cli, sweep
+from sphcore import cli
+from sphcore.sweep import command as sweep
 from sphcore.errors import CaseError
-from sphcore.sweep_grid import expand, fold, key_text, parse_key, parse_set, parse_vary, split_values
-from sphcore.sweep_results import grid, pareto_mask
+from sphcore.sweep.grid import expand, fold, key_text, parse_key, parse_set, parse_vary, split_values
+from sphcore.sweep.results import grid, pareto_mask
 
 TINY = """
 [case]
@@ -198,7 +199,9 @@ def _assert_matches_summaries(ds, out):
     numeric = [k for k in ds.data_vars if k not in ("status", "message", "task_wall_s")]
     for i, name in enumerate(ds["variant"].values):
         s = json.loads((out / name / "summary.json").read_text())
-        flat = dict(s, **{f"counters.{k}": v for k, v in s.pop("counters").items()})
+        flat = {}
+        for key, value in s.items():  # plugin figures and counters are flattened to table.key
+            flat.update({f"{key}.{k}": v for k, v in value.items()} if isinstance(value, dict) else {key: value})
         assert ds["status"].values[i] == s["status"] and ds["message"].values[i] == s["message"]
         for k in numeric:
             want = flat.get(k, math.nan)
@@ -226,7 +229,7 @@ def test_sweep_on_a_local_process_cluster(tiny, tmp_path, capsys):
     assert "density above the upper bound" in ds["message"].values[1]
     assert ds["t"].values[0] == pytest.approx(0.01) and ds["t"].values[1] < 0.01
     _assert_matches_summaries(ds, out)
-    assert ds.attrs["error_key"] == "pressure_max_layer_err"
+    assert ds.attrs["error_key"] == "pressure_gauge.pressure_max_layer_err"
     assert (out / "pareto.png").stat().st_size > 1000
     g = grid(ds)
     assert g["status"].dims == ("physics.sph", "checks.rho_max")

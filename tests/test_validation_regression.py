@@ -38,13 +38,13 @@ def total_energy(sim) -> float:
     relative to u(rho0) so that the total is not dominated by a constant.
     """
     st = sim.state
-    b = sim.c0 ** 2 * sim.rho0 / sim.gamma
+    b = sim.params.c0 ** 2 * sim.params.rho0 / sim.params.gamma
 
     def tait_u(rho):
-        return b * (rho ** (sim.gamma - 1) / (sim.rho0 ** sim.gamma * (sim.gamma - 1)) + 1.0 / rho)
+        return b * (rho ** (sim.params.gamma - 1) / (sim.params.rho0 ** sim.params.gamma * (sim.params.gamma - 1)) + 1.0 / rho)
 
-    u = tait_u(st.rho) - tait_u(sim.rho0)
-    g = sim.gravity[: st.dim]
+    u = tait_u(st.rho) - tait_u(sim.params.rho0)
+    g = sim.params.gravity[: st.dim]
     return float(np.sum(st.m * (0.5 * np.einsum("ij,ij->i", st.vel, st.vel) - st.pos @ g + u)))
 
 
@@ -64,7 +64,7 @@ def test_dam_break_first_50_ms(boundary):
     kinetic = 0.5 * float(np.sum(sim.state.m * np.einsum("ij,ij->i", sim.state.vel, sim.state.vel)))
     st = sim.state
     assert st.n == n0 and st.m.sum() == m0
-    assert sim.stats["escaped"] == 0
+    assert sim.ctx.stats("reflective").get("guard_returns", 0) == 0
     assert (sim.case.planes.distances(st.pos) >= st.radius[:, None] * (1 - 1e-9)).all()
     # energy: dissipated, never gained; the tolerance (0.1% of the kinetic energy reached)
     # covers the leapfrog's O(dt^2) energy error
@@ -106,7 +106,7 @@ def test_hydrostatic_tank_plain_tait_with_ghosts():
     below = rows[:, 0] < 1.0 - 2 * dx
     assert np.abs(rows[below, 3]).max() < 0.05
     assert abs(st.pos[:, 1].max() - top0) < 0.1 * dx
-    assert sim.stats["escaped"] == 0
+    assert sim.ctx.stats("reflective").get("guard_returns", 0) == 0
 
 
 def test_v_tank_sloped_walls_hold_every_particle():
@@ -118,7 +118,7 @@ def test_v_tank_sloped_walls_hold_every_particle():
     run(sim)
     st = sim.state
     d = sim.case.planes.distances(st.pos)
-    assert st.n == n0 and sim.stats["escaped"] == 0
+    assert st.n == n0 and sim.ctx.stats("reflective").get("guard_returns", 0) == 0
     assert (d >= st.radius[:, None] * (1 - 1e-9)).all()
     assert (d[:, 4:] < 2 * st.radius[:, None]).any()  # some particles are on the slopes
     assert st.pos[:, 1].mean() < y0 - 0.05
@@ -137,7 +137,7 @@ def test_time_step_past_the_stability_limit_is_caught_by_energy_growth():
     assert sim.t < 0.01
     sim = sim_of("dam_break", ['plugins.use=["reflective"]'], 0.02)
     run(sim)
-    assert sim.stats["energy_growth_max"] < 1e-4
+    assert sim.ctx.stats("core")["energy_growth_max"] < 1e-4
 
 
 def test_spheres_at_rest_50000_steps_bit_for_bit():
@@ -151,7 +151,7 @@ def test_spheres_at_rest_50000_steps_bit_for_bit():
     run(sim)
     assert sim.step == 50_000
     assert np.array_equal(sim.state.pos, pos0) and np.array_equal(sim.state.vel, vel0)
-    assert sim.stats["escaped"] == 0
+    assert sim.ctx.stats("reflective").get("guard_returns", 0) == 0
     # the contact is really there: the outer spheres touch the walls (d == r)
     d = case_.planes.distances(sim.state.pos)
     assert np.isclose(d, 0.01, rtol=0, atol=1e-15).any(axis=0).all()

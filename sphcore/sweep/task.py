@@ -26,7 +26,7 @@ from pathlib import Path
 
 GRACE_S = 60.0  # after SIGTERM, how long a run may take to write its checkpoint and summary
 LOG = "sweep.log"  # the variant process's stdout and stderr, kept when not empty
-_CHILD = "from sphcore.sweep_task import child_main; child_main()"
+_CHILD = "from sphcore.sweep.task import child_main; child_main()"
 _RUNNING: set = set()  # this worker's variant processes, for stop_running
 
 
@@ -108,8 +108,8 @@ def stop_running() -> int:
 def child_main():
     """In the variant's process: read the payload on stdin, run, write the summary."""
     payload = json.loads(sys.stdin.read())
-    from . import pluginhost, runner
-    from .errors import CaseError, OutputError
+    from .. import pluginhost, runner
+    from ..errors import CaseError, OutputError
 
     try:
         summary = public(runner.run(payload["case_dir"], payload["output"],

@@ -16,7 +16,6 @@ from numbers import Number
 import numpy as np
 
 STATUS_KEYS = ("status", "message")
-ERROR_KEYS = ("err_cruchaga_0.20s", "rms_rel_err_martin_moyce_T3", "pressure_max_layer_err")
 
 
 def _flatten(summary: dict) -> dict:
@@ -100,10 +99,19 @@ def grid(ds):
 
 # -- reading the results -----------------------------------------------------------------
 
+def is_error_key(key: str) -> bool:
+    """A plugin figure named ``err*``, ``rms*`` or ``*_err`` (``front_gauge.err_cruchaga_0.20s``,
+    ``pressure_gauge.pressure_max_layer_err``) is an error against a reference: the naming
+    convention the sweep relies on to pick a default error."""
+    last = key.rsplit(".", 1)[-1]
+    return last.startswith(("err", "rms")) or last.endswith("_err")
+
+
 def default_error_key(ds) -> str | None:
-    """The first of ERROR_KEYS that some variant reported as a finite number."""
-    for k in ERROR_KEYS:
-        if k in ds and np.isfinite(ds[k].values.astype(float)).any():
+    """The first error figure (:func:`is_error_key`), in the Dataset's order, that some
+    variant reported as a finite number."""
+    for k in ds.data_vars:
+        if is_error_key(k) and ds[k].dtype.kind in "fiu" and np.isfinite(ds[k].values.astype(float)).any():
             return k
     return None
 

@@ -4,14 +4,14 @@
               [--scheduler ADDRESS | --workers N] [--output DIR] [--overwrite]
               [--timeout S] [--error KEY] [--progress auto|bar|log|off] [--dry-run]
 
-1. :func:`plan` expands the grid (:mod:`sphcore.sweep_grid`) and validates every variant
+1. :func:`plan` expands the grid (:mod:`sphcore.sweep.grid`) and validates every variant
    (case loaded with its overrides, particles built): a malformed one is a
    :class:`CaseError` naming the key and the variant before anything runs.
-2. :func:`run` submits one task per variant (:func:`sphcore.sweep_task.run_variant`) to a
+2. :func:`run` submits one task per variant (:func:`sphcore.sweep.task.run_variant`) to a
    ``distributed.LocalCluster`` sized to the machine (one process and one thread per
    worker, ``NUMBA_NUM_THREADS=1``), or to the scheduler at ``--scheduler``; it shows
    progress as tasks finish, then writes ``sweep.nc`` and ``pareto.png``
-   (:mod:`sphcore.sweep_results`). A variant that fails or goes unstable is recorded with
+   (:mod:`sphcore.sweep.results`). A variant that fails or goes unstable is recorded with
    its status and reason; the others go on.
 
 Dask is imported only here, and only when a sweep runs (the optional extra ``sweep``).
@@ -31,12 +31,12 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import __version__
-from .case import case_file, read_toml
-from .errors import CaseError, OutputError
-from .sweep_grid import Axis, Variant, expand, fold, parse_vary
-from .sweep_results import default_error_key, grid, plot_pareto, table, to_dataset  # noqa: F401 (grid: API)
-from .sweep_task import run_variant, stop_running
+from .. import __version__
+from ..case import case_file, read_toml
+from ..errors import CaseError, OutputError
+from .grid import Axis, Variant, expand, fold, parse_vary
+from .results import default_error_key, grid, plot_pareto, table, to_dataset  # noqa: F401 (grid: API)
+from .task import run_variant, stop_running
 
 INSTALL_HINT = 'sph sweep needs Dask: pip install -e ".[sweep]" (dask[distributed])'
 RESULTS, PLOT = "sweep.nc", "pareto.png"
@@ -60,8 +60,8 @@ class Plan:
 
 def plan(case_dir, vary=(), sets=(), t_end=None) -> Plan:
     """Expand and validate; raises :class:`CaseError` naming the key and the variant."""
-    from . import runner
-    from .simulation import build_state
+    from .. import runner
+    from ..simulation import build_state
 
     case_dir = Path(case_dir).resolve()
     file = case_file(case_dir)
@@ -178,7 +178,7 @@ def run(p: Plan, output=None, scheduler=None, workers=None, processes=True, time
     directory (default ``<case>/sweep``; each variant's own output in a subdirectory named
     after it) and returns the Dataset. ``ds.attrs["interrupted"]`` is 1 after Ctrl-C (the
     variants not done are recorded as 'cancelled')."""
-    from . import runner
+    from .. import runner
 
     distributed = _distributed()
     out = Path(output or p.case_dir / "sweep").resolve()
@@ -252,7 +252,7 @@ def main(args) -> int:
     completed, went unstable or timed out (the sweep's results are what was asked for);
     1 some variant failed (an exception or a lost task: see its message); 2 bad input or
     no Dask, nothing run; 130 interrupted (what finished is written)."""
-    from .pluginhost import PluginLoadError
+    from ..pluginhost import PluginLoadError
 
     try:
         if args.scheduler and args.workers:
