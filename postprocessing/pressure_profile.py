@@ -20,8 +20,10 @@ from sphcore_plugins.gauges.hydrostatic import layer_errors
 
 try:
     from frames import frames
-except ImportError:
+    from runs import open_run
+except ImportError:  # imported as postprocessing.pressure_profile
     from .frames import frames
+    from .runs import open_run
 
 G = 9.81
 
@@ -40,17 +42,27 @@ def layer_profile(pos, p, radius, H, rho0, floor=0.0, up=1):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run")
-    ap.add_argument("--H", type=float, default=1.0, help="still-water depth (m)")
-    ap.add_argument("--rho0", type=float, default=1000.0)
+    ap.add_argument("--H", type=float, help="still-water depth (m); default: the run's fluid block")
+    ap.add_argument("--rho0", type=float, help="reference density (kg/m^3); default: the run's")
     ap.add_argument("--time", type=float, help="frame time (s); default: the last frame")
     args = ap.parse_args(argv)
+    found = open_run(args.run, "pressure_profile.py", "tank_at_rest")
+    if found.config:
+        block = found.first_block()
+        top = block["max"][1] if block.get("max") is not None else \
+            block["min"][1] + block["count"][1] * found.config["particles"]["dx"]
+        args.H = float(top - found.config["domain"]["min"][1]) if args.H is None else args.H
+        args.rho0 = found.config["fluid"]["rho0"] if args.rho0 is None else args.rho0
+    args.H = 1.0 if args.H is None else args.H
+    args.rho0 = 1000.0 if args.rho0 is None else args.rho0
+    args.run = found.frames
     chosen = None
     for t, pos, f in frames(args.run):
         if chosen is None or args.time is None or abs(t - args.time) < abs(chosen[0] - args.time):
             chosen = (t, pos, f)
     t, pos, f = chosen
     prof, dx = layer_profile(pos, f["pressure"], f["radius"], args.H, args.rho0)
-    outdir = Path(args.run) if Path(args.run).is_dir() else Path(args.run).parent
+    outdir = found.dir
     np.savetxt(outdir / "pressure_profile.csv", prof, delimiter=",", comments="", fmt="%.6g",
                header="y_m,p_mean_pa,p_min_pa,p_max_pa,p_hydrostatic_pa,rel_err")
     below = prof[:, 0] < args.H - 2 * dx

@@ -22,8 +22,10 @@ from sphcore_plugins.gauges.front import compare, front_position
 
 try:
     from frames import frames
+    from runs import open_run
 except ImportError:  # imported as postprocessing.wavefront
     from .frames import frames
+    from .runs import open_run
 
 G = 9.81
 
@@ -52,15 +54,25 @@ def plot(t, x, a, png):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run", help="a run's output directory, .pvd or particles.nc")
-    ap.add_argument("--a", type=float, default=0.114, help="initial column width (m)")
+    ap.add_argument("--a", type=float, help="initial column width (m); default: the run's first fluid block")
     ap.add_argument("--band", type=float, default=2.0, help="floor band height in particle spacings")
     ap.add_argument("--gap", type=float, default=2.0, help="largest gap in the connected front, in spacings")
     ap.add_argument("--csv", help="output CSV (default RUN/wavefront.csv)")
     ap.add_argument("--png", help="output PNG (default RUN/wavefront.png)")
-    ap.add_argument("--x-wall", type=float, default=0.42, help="opposite wall (m): Martin & Moyce points beyond it are left out")
+    ap.add_argument("--x-wall", type=float, help="opposite wall (m): Martin & Moyce points beyond it are left out; "
+                    "default: the run's domain")
     args = ap.parse_args(argv)
-    run = Path(args.run)
-    outdir = run if run.is_dir() else run.parent
+    found = open_run(args.run, "wavefront.py", "dam_break")
+    run, outdir = found.frames, found.dir
+    if found.config:
+        block, dom = found.first_block(), found.config["domain"]
+        if args.a is None:
+            args.a = float(block["max"][0] - block["min"][0]) if block.get("max") is not None \
+                else block["count"][0] * found.config["particles"]["dx"]
+        if args.x_wall is None:
+            args.x_wall = float(dom["max"][0])
+    args.a = 0.114 if args.a is None else args.a  # the seed's column, for runs of older versions
+    args.x_wall = 0.42 if args.x_wall is None else args.x_wall
     series = [(t, front_position(p, f["radius"], band=args.band, gap=args.gap)) for t, p, f in frames(run)]
     t, x = np.array(series).T
     csv_path = Path(args.csv or outdir / "wavefront.csv")

@@ -69,9 +69,14 @@ def peak_memory_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: kB
 
 
+def _jsonable(o):
+    """numpy scalars and arrays in a summary, as JSON numbers and lists."""
+    return o.tolist() if hasattr(o, "tolist") else float(o)
+
+
 def _write_json(path: Path, data: dict):
     tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=float) + "\n")
+    tmp.write_text(json.dumps(data, indent=2, default=_jsonable) + "\n")
     os.replace(tmp, path)
 
 
@@ -130,6 +135,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
             "peak_memory_mb": peak_memory_mb(),
             "c0": sim.params.c0, "h": sim.params.h, "plugins": case.config["plugins"]["use"],
             "counters": dict(sim.counters),
+            "config": case.config,  # the validated case after --set: what post-processing reads
         }
         summary.update(pluginhost.summaries(pm, sim.ctx))
         pm.hook.sph_finish(ctx=sim.ctx)

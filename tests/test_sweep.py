@@ -7,6 +7,7 @@ fresh Python process (see sphcore/sweep/task.py), about 2-4 s on two cores.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import sys
@@ -210,6 +211,11 @@ def _assert_matches_summaries(ds, out):
         assert not [k for k, v in flat.items() if isinstance(v, (int, float)) and k not in ds]
 
 
+needs_dask = pytest.mark.skipif(importlib.util.find_spec("distributed") is None,
+                                reason='needs Dask: pip install -e ".[test]" (or ".[sweep]")')
+
+
+@needs_dask
 def test_sweep_on_a_local_process_cluster(tiny, tmp_path, capsys):
     """2 x 2 variants on 2 worker processes; density bound 1.0001 rho0 with SPH on is unstable
     at the first step (hydrostatic start), and must be recorded while the others complete."""
@@ -237,6 +243,7 @@ def test_sweep_on_a_local_process_cluster(tiny, tmp_path, capsys):
     assert "[sweep] 4/4" in cap.err and "unstable" in cap.out  # progress lines, then the table
 
 
+@needs_dask
 def test_sweep_in_process_cluster_with_linked_and_indexed_keys(tiny, tmp_path):
     """Threads instead of processes (the variant still runs in its own process); a linked
     pair (dx with the block's corner) and a key inside an array of tables."""
@@ -257,6 +264,7 @@ def test_sweep_in_process_cluster_with_linked_and_indexed_keys(tiny, tmp_path):
                                             overwrite=True)["n_particles"].values, [15, 25])
 
 
+@needs_dask
 def test_sweep_on_a_given_scheduler(tiny, tmp_path, capsys):
     """--scheduler ADDRESS: the sweep uses that cluster and leaves it running."""
     import xarray as xr
