@@ -21,7 +21,7 @@ integrals of piecewise-polynomial radial functions have closed forms (``tables.p
 in 2D along the segment, int r^k dt by the recurrence A_k = (t r^k + k delta^2 A_(k-2))/(k+1)
 and int d/r^2 dt = atan(t/d); in 3D the polygon is split into signed triangles (foot point,
 edge), whose polar integrals reduce to p int r^k / (p^2 + t^2) dt (recurrence
-B_k = A_(k-2) + d^2 B_(k-2), B_0 = atan(t/p)/p, d B_(-1) = atan(p t / (d r))/p; the s term
+B_k = A_(k-2) + d^2 B_(k-2), B_0 = atan(t/p)/p, d B_(-1) = atan(d t / (p r))/p; the s term
 K(2h)/r^3 is the solid angle). The in-plane first moment is an edge integral of
 Q(r) = -int_r^2h W u du. A single plane has S(z), Wbar(z) in closed form and is the cheap
 path; corners, edges, wedges and vertices (any angles, up to ~12 planes) are exact too.
@@ -140,7 +140,7 @@ def _edge_prim3(kid, pc, d, p, t):
     r = math.sqrt(dl2 + t * t)
     am1 = math.asinh(t / math.sqrt(dl2))
     b0 = math.atan(t / p)
-    bm1d = math.atan2(p * t, d * r)
+    bm1d = math.atan(d * t / (p * r))  # d pB_-1
     a0 = t
     a1 = 0.5 * (t * r + dl2 * am1)
     b1 = p * am1 + d * bm1d
