@@ -171,10 +171,11 @@ def test_box_corner_2d_and_its_mirror_symmetry(kid):
     assert G[0] == pytest.approx(G[1], rel=1e-13)                 # corner symmetric about x = y
     T = moment_tensor_at([0.6, 0.6], nrm, off, kid, H)
     assert T[0, 0] == pytest.approx(T[1, 1], rel=1e-12)
-    # at the corner s -> 3/4 (three quadrants outside) and G -> the sum of the two walls' -Wbar(0) n
+    # at the corner s -> 3/4 (three quadrants outside); each wall face is a half-line seen from
+    # its end, so G -> -(Wbar(0) / 2) (n_1 + n_2)
     s0, G0, _ = wall_terms_at([1e-9, 1e-9], nrm, off, kid, H)
     assert s0 == pytest.approx(0.75, abs=1e-8)
-    assert np.allclose(G0, -wbar(kid, 0.0, H, 2), rtol=1e-6)
+    assert np.allclose(G0, -0.5 * wbar(kid, 0.0, H, 2), rtol=1e-6)
 
 
 @pytest.mark.parametrize("kid", [0, 1])
