@@ -287,6 +287,55 @@ def _face3(kid, x0, x1, x2, normals, offsets, h, k, d):
     return s, w, m0, m1, m2
 
 
+# ---------------------------------------------------------------- single plane
+
+NTAB = 2048  # intervals of the single-plane tables on z in [0, 2h]
+
+
+@njit(cache=True)
+def plane_exact(kid, dim, z):
+    """(S(z), h Wbar(z)) of one plane at distance z (units of h), closed form (Ferrand 2013 Eq. 14).
+
+    S = wall share (1), Wbar = int_plane W dS (1/m), the marginal kernel; S' = -Wbar.
+    """
+    if z >= 2.0:
+        return 0.0, 0.0
+    if dim == 2:
+        sz, wz, _ = _segment2(kid, z, -np.inf, np.inf)
+        return sz, wz
+    return (2.0 * math.pi * (z * PS2_[kid] - _lval(PS, kid, 1, z, 1)),
+            2.0 * math.pi * (PW2[kid, 1] - _lval(PW, kid, 1, z, 0)))
+
+
+@njit(cache=True)
+def _fill_plane_tables(tab):
+    for kid in range(2):
+        for di in range(2):
+            for i in range(NTAB + 1):
+                tab[kid, di, 0, i], tab[kid, di, 1, i] = plane_exact(kid, di + 2, 2.0 * i / NTAB)
+
+
+PLANE = np.zeros((2, 2, 2, NTAB + 1))
+_fill_plane_tables(PLANE)
+
+
+@njit(cache=True, inline="always")
+def _plane_lookup(kid, di, z):
+    """(S(z), h Wbar(z)) by 4-point (cubic) Lagrange interpolation in PLANE; error < 1e-10."""
+    u = z * (NTAB / 2.0)
+    i = min(max(int(u) - 1, 0), NTAB - 3)
+    t = u - i  # nodes at t = 0, 1, 2, 3
+    l0 = -(t - 1.0) * (t - 2.0) * (t - 3.0) / 6.0
+    l1 = t * (t - 2.0) * (t - 3.0) / 2.0
+    l2 = -t * (t - 1.0) * (t - 3.0) / 2.0
+    l3 = t * (t - 1.0) * (t - 2.0) / 6.0
+    sz = (l0 * PLANE[kid, di, 0, i] + l1 * PLANE[kid, di, 0, i + 1]
+          + l2 * PLANE[kid, di, 0, i + 2] + l3 * PLANE[kid, di, 0, i + 3])
+    wz = (l0 * PLANE[kid, di, 1, i] + l1 * PLANE[kid, di, 1, i + 1]
+          + l2 * PLANE[kid, di, 1, i + 2] + l3 * PLANE[kid, di, 1, i + 3])
+    return sz, wz
+
+
 # ---------------------------------------------------------------- drivers
 
 @njit(cache=True)
@@ -324,13 +373,12 @@ def wall_point(x0, x1, x2, normals, offsets, kernel_id, h, g0, g1, g2):
         m0 = 0.0
         m1 = 0.0
         m2 = 0.0
-        if dim == 2:
+        if nact == 1:  # one plane: tabulated S(z), Wbar(z); no in-plane moment by symmetry
+            fs, fw = _plane_lookup(kernel_id, dim - 2, d)
+        elif dim == 2:
             fs, fw, fwt, tx, ty = _face2(kernel_id, x0, x1, normals, offsets, h, k, d)
             m0 = fwt * tx
             m1 = fwt * ty
-        elif nact == 1:  # one plane: S(z) and Wbar(z) in closed form, no in-plane moment
-            fs = 2.0 * math.pi * (d * PS2_[kernel_id] - _lval(PS, kernel_id, 1, d, 1))
-            fw = 2.0 * math.pi * (PW2[kernel_id, 1] - _lval(PW, kernel_id, 1, d, 0))
         else:
             fs, fw, m0, m1, m2 = _face3(kernel_id, x0, x1, x2, normals, offsets, h, k, d)
         s += fs
@@ -356,8 +404,21 @@ def wall_terms(pos, normals, offsets, kernel_id, h, gravity, share, grad, hydro)
     n, dim = pos.shape
     g0, g1 = gravity[0], gravity[1]
     g2 = gravity[2] if dim == 3 else 0.0
+    nk = normals.shape[0]
     for i in prange(n):
         x2 = pos[i, 2] if dim == 3 else 0.0
+        dmin = np.inf
+        for k in range(nk):
+            dk = normals[k, 0] * pos[i, 0] + normals[k, 1] * pos[i, 1] - offsets[k]
+            if dim == 3:
+                dk += normals[k, 2] * x2
+            dmin = min(dmin, dk)
+        if dmin >= 2.0 * h:  # far from every wall: the common case, kept cheap
+            share[i] = 0.0
+            for c in range(dim):
+                grad[i, c] = 0.0
+                hydro[i, c] = 0.0
+            continue
         s, a0, a1, a2, t0, t1, t2 = wall_point(pos[i, 0], pos[i, 1], x2, normals, offsets,
                                                kernel_id, h, g0, g1, g2)
         share[i] = s
