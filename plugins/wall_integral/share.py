@@ -160,69 +160,55 @@ def _edge_prim3(kid, pc, d, p, t):
 
 
 @njit(cache=True)
-def _edge3(kid, d, p, lo, hi, dps_d, psw_d):
-    """Signed triangle (foot, edge) of a face at distance d, clipped to the support disc.
+def _edge3(kid, d, p, lo, hi):
+    """Part inside the support disc of the signed triangle (foot, edge t in [lo, hi]).
 
-    Returns (d int f_s dA, int W dA, int_edge Q dt) with Q = Psi_W(r) - Psi_W(2);
-    dps_d = d Psi_s(d), psw_d = Psi_W(d). h = 1.
+    Face at distance d, edge line at signed in-plane distance p (> 0: foot on the inner
+    side), h = 1. Returns (d int f_s dA + d Psi_s(d) dphi, int W dA + Psi_W(d) dphi,
+    int_edge Q dt, dphi) over the in-disc part, Q = Psi_W(r) - Psi_W(2), dphi its polar
+    angle seen from the foot (the -Psi(d) dphi terms are added once per face).
     """
-    if abs(p) < _EPS or hi <= lo:
-        return 0.0, 0.0, 0.0
     rr = 4.0 - d * d - p * p
-    t2 = math.sqrt(rr) if rr > 0.0 else 0.0
-    # parts of the edge beyond the support: polar sector of radius R2, Phi(2h) dphi
-    arc = 0.0
-    if lo < -t2:
-        arc += math.atan(min(hi, -t2) / p) - math.atan(lo / p)
-    if hi > t2:
-        arc += math.atan(hi / p) - math.atan(max(lo, t2) / p)
-    s = (d * PS2_[kid] - dps_d) * arc
-    w = (PW2[kid, 1] - psw_d) * arc
+    if rr <= 0.0 or hi <= lo:
+        return 0.0, 0.0, 0.0, 0.0
+    t2 = math.sqrt(rr)
+    dl2 = d * d + p * p
+    t1 = math.sqrt(1.0 - dl2) if dl2 < 1.0 else 0.0
+    s = 0.0
+    w = 0.0
     q = 0.0
-    if rr > 0.0:
-        dl2 = d * d + p * p
-        t1 = math.sqrt(1.0 - dl2) if dl2 < 1.0 else 0.0
-        for j in range(3):
-            a, b, pc = (-t2, -t1, 1) if j == 0 else ((-t1, t1, 0) if j == 1 else (t1, t2, 1))
-            a = max(a, lo)
-            b = min(b, hi)
-            if b > a:
-                sb, wb, qb, b0b = _edge_prim3(kid, pc, d, p, b)
-                sa, wa, qa, b0a = _edge_prim3(kid, pc, d, p, a)
-                s += sb - sa - dps_d * (b0b - b0a)
-                w += wb - wa - psw_d * (b0b - b0a)
-                q += qb - qa - PW2[kid, 1] * (b - a)
-    return s, w, q
-
-
-_SQ = 2.5  # half side of the square (units of h) that bounds each face; > support radius
+    phi = 0.0
+    for j in range(3):
+        a, b, pc = (-t2, -t1, 1) if j == 0 else ((-t1, t1, 0) if j == 1 else (t1, t2, 1))
+        a = max(a, lo)
+        b = min(b, hi)
+        if b > a:
+            sb, wb, qb, b0b = _edge_prim3(kid, pc, d, p, b)
+            sa, wa, qa, b0a = _edge_prim3(kid, pc, d, p, a)
+            s += sb - sa
+            w += wb - wa
+            q += qb - qa - PW2[kid, 1] * (b - a)
+            phi += b0b - b0a
+    return s, w, q, phi
 
 
 @njit(cache=True, inline="always")
-def _constraint3(j, k, nk, x0, x1, x2, normals, offsets, h, e1, e2, d):
-    """Half-plane a.u >= b of face k (coordinates u on (e1, e2) from the foot point).
+def _constraint3(j, k, x0, x1, x2, normals, offsets, h, e1, e2, d):
+    """Half-plane a.u >= b that plane j cuts from face k (u on (e1, e2) from the foot point).
 
-    j < nk: plane j; j >= nk: side of the bounding square. kind 0: line, 1: no
-    constraint, 2: face k is hidden (parallel plane in front, or a duplicate of lower index).
+    kind 0: a line; 1: no constraint within the support (j = k, plane j farther than 2h,
+    or parallel behind); 2: face k is hidden (parallel plane in front, or a duplicate of
+    lower index).
     """
-    if j >= nk:
-        i = j - nk
-        if i == 0:
-            return 1.0, 0.0, -_SQ, 0
-        if i == 1:
-            return -1.0, 0.0, -_SQ, 0
-        if i == 2:
-            return 0.0, 1.0, -_SQ, 0
-        return 0.0, -1.0, -_SQ, 0
     if j == k:
         return 0.0, 0.0, 0.0, 1
     dj = (normals[j, 0] * x0 + normals[j, 1] * x1 + normals[j, 2] * x2 - offsets[j]) / h
     if dj >= 2.0:
-        return 0.0, 0.0, 0.0, 1
+        return 0.0, 0.0, 0.0, 1  # all of plane j lies outside the support ball
     ax = normals[j, 0] * e1[0] + normals[j, 1] * e1[1] + normals[j, 2] * e1[2]
     ay = normals[j, 0] * e2[0] + normals[j, 1] * e2[1] + normals[j, 2] * e2[2]
     nn = normals[j, 0] * normals[k, 0] + normals[j, 1] * normals[k, 1] + normals[j, 2] * normals[k, 2]
-    c = max(dj, 0.0) - d * nn
+    c = max(dj, 0.0) - d * nn  # d_j at the foot point
     na = math.sqrt(ax * ax + ay * ay)
     if na < 1e-10:
         if c < -_EPS or (c <= _EPS and nn > 0.0 and j < k):
@@ -233,37 +219,46 @@ def _constraint3(j, k, nk, x0, x1, x2, normals, offsets, h, e1, e2, d):
 
 @njit(cache=True)
 def _face3(kid, x0, x1, x2, normals, offsets, h, k, d):
-    """(d int f_s dA, int W dA, in-plane int W y dA (3 components)) of face k, h = 1 units."""
+    """(d int f_s dA, int W dA, in-plane int W y dA (3 components)) of face k, h = 1 units.
+
+    The face polygon P (possibly unbounded) is cut by the other planes within 2h. Sum over
+    its edges of the signed triangles (foot, edge) clipped to the disc of radius
+    R = sqrt(4 - d^2); the rest of P inside the disc is a polar sector of radius R with
+    angle 2 pi [foot in P] - sum of the edges' in-disc angles (winding number), whose
+    integrand is the constant Phi(2h) = Psi(2) - Psi(d).
+    """
     nk = normals.shape[0]
     n0, n1, n2 = normals[k, 0], normals[k, 1], normals[k, 2]
-    # orthonormal (e1, e2) with e1 x e2 = n_k
-    if abs(n0) < 0.9:
-        c0, c1, c2 = 0.0, n2, -n1  # n x (1,0,0)
+    if abs(n0) < 0.9:  # orthonormal (e1, e2) with e1 x e2 = n_k
+        c0, c1, c2 = 0.0, n2, -n1
     else:
-        c0, c1, c2 = -n2, 0.0, n0  # n x (0,1,0)
+        c0, c1, c2 = -n2, 0.0, n0
     cn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
     e1 = (c0 / cn, c1 / cn, c2 / cn)
     e2 = (n1 * e1[2] - n2 * e1[1], n2 * e1[0] - n0 * e1[2], n0 * e1[1] - n1 * e1[0])
-    dps_d = _lval(PS, kid, 1, d, 1)
-    psw_d = _lval(PW, kid, 1, d, 0)
+    inside = 1.0
     for j in range(nk):
-        if _constraint3(j, k, nk, x0, x1, x2, normals, offsets, h, e1, e2, d)[3] == 2:
+        kind = _constraint3(j, k, x0, x1, x2, normals, offsets, h, e1, e2, d)
+        if kind[3] == 2:
             return 0.0, 0.0, 0.0, 0.0, 0.0
+        if kind[3] == 0 and kind[2] > 0.0:  # foot on the outer side of an edge line
+            inside = 0.0
     s = 0.0
     w = 0.0
+    phi = 0.0
     m0 = 0.0
     m1 = 0.0
     m2 = 0.0
-    for i in range(nk + 4):
-        ax, ay, b, kind = _constraint3(i, k, nk, x0, x1, x2, normals, offsets, h, e1, e2, d)
+    for i in range(nk):
+        ax, ay, b, kind = _constraint3(i, k, x0, x1, x2, normals, offsets, h, e1, e2, d)
         if kind != 0:
             continue
         tx, ty = ay, -ax  # edge direction: polygon counter-clockwise in (e1, e2)
         lo, hi = -np.inf, np.inf
-        for j in range(nk + 4):
+        for j in range(nk):
             if j == i:
                 continue
-            bx, by, bb, kj = _constraint3(j, k, nk, x0, x1, x2, normals, offsets, h, e1, e2, d)
+            bx, by, bb, kj = _constraint3(j, k, x0, x1, x2, normals, offsets, h, e1, e2, d)
             if kj != 0:
                 continue
             cj = bx * tx + by * ty
@@ -277,13 +272,21 @@ def _face3(kid, x0, x1, x2, normals, offsets, h, k, d):
                 lo = np.inf  # parallel line in front, or duplicate edge
         if hi <= lo:
             continue
-        es, ew, eq = _edge3(kid, d, -b, lo, hi, dps_d, psw_d)
+        p = -b
+        p = max(p, _EPS) if p >= 0.0 else min(p, -_EPS)  # foot on the line counts as inside
+        es, ew, eq, ephi = _edge3(kid, d, p, lo, hi)
         s += es
         w += ew
+        phi += ephi
         # in-plane moment: outward edge normal -a times int Q dt (Q = 0 beyond the support)
         m0 -= eq * (ax * e1[0] + ay * e2[0])
         m1 -= eq * (ax * e1[1] + ay * e2[1])
         m2 -= eq * (ax * e1[2] + ay * e2[2])
+    arc = 2.0 * math.pi * inside - phi
+    dps_d = _lval(PS, kid, 1, d, 1)
+    psw_d = _lval(PW, kid, 1, d, 0)
+    s += (d * PS2_[kid] - dps_d) * arc - dps_d * phi
+    w += (PW2[kid, 1] - psw_d) * arc - psw_d * phi
     return s, w, m0, m1, m2
 
 
