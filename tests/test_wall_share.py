@@ -191,6 +191,20 @@ def test_box_vertex_3d(kid):
 
 
 @pytest.mark.parametrize("kid", [0, 1])
+def test_points_on_walls_edges_and_vertices(kid):
+    """Where the face formulas are 0/0 (x on two walls, or projecting onto an edge line)."""
+    for x in ([0.0, 0.4], [0.0, 0.0], [0.0, 1.0]):
+        check(x, np.eye(2), np.zeros(2), kid, 2000, TOL_2D)
+    for x in ([0.0, 0.4, 0.5], [0.0, 0.0, 0.5], [0.0, 0.3, 0.0], [0.0, 0.0, 0.0]):
+        check(x, np.eye(3), np.zeros(3), kid, 200, TOL_3D)
+    # a 135-degree edge: points whose foot on one wall lies on the other wall's trace
+    n = unit([[0.0, 0.0, 1.0], [0.0, 1.0, 1.0]])
+    for z in (0.3, 1.1):
+        x = np.array([0.1, 0.0, z])   # d_2 - d_1 cos(45 deg) = 0: foot on plane 2
+        check(x, n, [0.0, 0.0], kid, 160, TOL_3D)
+
+
+@pytest.mark.parametrize("kid", [0, 1])
 @pytest.mark.parametrize("deg", [7.0, 130.0])
 def test_wedges_narrow_and_obtuse(kid, deg):
     a = math.radians(deg) / 2                      # fluid between two lines through 0, opening deg
