@@ -231,14 +231,14 @@ def _domain(dim, draw):
     return nrm, -d, draw(st.integers(0, 1))   # x = 0 inside: offsets o_k = -d_k
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
 @given(st.data())
 def test_random_convex_domains_2d(data):
     nrm, off, kid = _domain(2, data.draw)
     check(np.zeros(2), nrm, off, kid, 2000, TOL_2D)
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
 @given(st.data())
 def test_random_convex_domains_3d(data):
     nrm, off, kid = _domain(3, data.draw)
