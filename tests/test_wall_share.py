@@ -212,12 +212,14 @@ def test_wedges_narrow_and_obtuse(kid, deg):
     for r in (0.2, 0.8, 1.9, 3.0):
         check([r, 0.0], n2, [0.0, 0.0], kid, 3000, TOL_2D)
         check([r, 0.3 * r * math.tan(a)], n2, [0.0, 0.0], kid, 3000, TOL_2D)
-    # 3D: the same wedge extruded along z (an edge) and a narrow pyramid-like vertex
-    n3 = np.c_[n2, np.zeros(2)] @ rotation(0.2, 0.5, 0.1).T
+    # 3D: the same wedge as an edge along x (bisector +y; the reference's columns run along z,
+    # across both walls), then closed by a third plane: a sharp vertex
+    R = rotation(0.2, 0.1, 0.05)
+    n3 = np.array([[0.0, math.sin(a), math.cos(a)], [0.0, math.sin(a), -math.cos(a)]]) @ R.T
     for r in (0.3, 1.2):
-        check(rotation(0.2, 0.5, 0.1) @ [r, 0.0, 0.1], n3, [0.0, 0.0], kid, 160, TOL_3D)
-    cap = unit(rotation(0.2, 0.5, 0.1) @ [-0.3, 0.1, 1.0])      # closes the wedge: a 3-plane vertex
-    x = rotation(0.2, 0.5, 0.1) @ [0.5, 0.0, 0.1]
+        check(R @ [0.1, r, 0.2 * r * math.tan(a)], n3, [0.0, 0.0], kid, 160, TOL_3D)
+    cap = R @ unit([0.3, -1.0, 0.4])
+    x = R @ [0.1, 0.5, 0.0]
     check(x, np.r_[n3, cap[None]], [0.0, 0.0, cap @ x - 0.25], kid, 160, TOL_3D)
 
 
