@@ -3,7 +3,7 @@
 For a point x of the fluid Omega (intersection of the half-spaces d_k = n_k.x - o_k >= 0,
 n_k pointing into the fluid) and the outside O = R^dim minus Omega, with y = x' - x, r = |y|:
 
-    s(x) = int_O W(r) dx'                      wall share (1 - gamma; Ferrand et al. 2013 Eq. 14)
+    s(x) = int_O W(r) dx'                      wall share (1 - gamma_a of Ferrand et al. 2013)
     G(x) = grad s = int_O F(r) (x - x') dx'    1/m, points towards the walls
     T(x) = int_O (-F) y y^T dx' - s I          moment tensor (1); ``wall_terms`` returns T g
 
@@ -37,7 +37,7 @@ NTAB = 2048  # intervals of the single-plane tables on z in [0, 2h]
 
 @njit(cache=True)
 def plane_exact(kid, dim, z):
-    """(S(z), h Wbar(z)) of one plane at distance z (units of h), closed form (Ferrand 2013 Eq. 14).
+    """(S(z), h Wbar(z)) of one plane at distance z (units of h), closed form.
 
     S = wall share (1), Wbar = int_plane W dS (1/m), the marginal kernel; S' = -Wbar.
     """
@@ -124,7 +124,11 @@ def wall_point(x0, x1, x2, normals, offsets, kernel_id, h, g0, g1, g2):
     (see ``_degenerate``: on an edge, at a corner, or projecting exactly onto an edge line)
     x is moved 1e-8 h into the fluid along a generic direction (s, G, T g change by ~1e-8).
     """
-    if _degenerate(x0, x1, x2, normals, offsets, h):
+    nact = 0
+    for k in range(normals.shape[0]):
+        if _dist(normals, offsets, k, x0, x1, x2) < 2.0 * h:
+            nact += 1
+    if nact >= 2 and _degenerate(x0, x1, x2, normals, offsets, h):
         v0, v1, v2 = 0.31, 0.57, 0.27 * (normals.shape[1] == 3)
         for k in range(normals.shape[0]):
             if _dist(normals, offsets, k, x0, x1, x2) < 1e-9 * h:

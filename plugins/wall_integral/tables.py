@@ -15,8 +15,8 @@ Arrays are indexed ``[kernel_id, dim - 2, piece, power + OFF]`` with powers -3..
 * ``PS``   Psi_s(q) = an antiderivative of f_s(q) q (3D only; q^-1 term on piece 0)
 
 and ``KTOT[k, d] = K(2)`` (= 1/(2 pi) in 2D, 1/(4 pi) in 3D), ``PW2 = Psi_W(2)``,
-``PS2 = Psi_s(2)``. See Ferrand et al. (2013) Eq. (14)-(16) for why these integrals
-appear (wall renormalisation gamma and its gradient), and Feldman & Bonet (2007) for the
+``PS2 = Psi_s(2)``. See Ferrand et al. (2013) for why these integrals
+appear (the wall renormalisation factor gamma and its gradient), and Feldman & Bonet (2007) for the
 boundary form of the gradient.
 """
 
