@@ -117,6 +117,9 @@ def _build():
     return wc, sc, pw, ps, ktot, pw2, ps2
 
 
+# numba freezes these global arrays into the machine code it caches for faces.py/share.py,
+# and only the *using* module's timestamp invalidates that cache: after editing this file,
+# delete plugins/wall_integral/__pycache__/*.nbi and *.nbc.
 WC, SC, PW, PS, KTOT, PW2, PS2 = _build()
 
 
