@@ -225,8 +225,25 @@ def test_wedges_narrow_and_obtuse(kid, deg):
     check(x, np.r_[n3, cap[None]], [0.0, 0.0, cap @ x - 0.25], kid, 160, TOL_3D)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_parallel_walls_and_duplicate_planes(dim):
+    """A channel narrower than the support (both parallel walls within 2h) and a corner
+    whose planes are listed twice: the duplicate must not be counted twice."""
+    R = rotation(0.3, 0.2, 0.1)[:dim, :dim] if dim == 3 else np.array([[0.8, -0.6], [0.6, 0.8]])
+    nrm = np.r_[np.eye(dim)[-1:], -np.eye(dim)[-1:]] @ R.T          # walls n.x = 0 and n.x = 1.5h
+    x = R @ np.r_[np.zeros(dim - 1), 0.4]
+    ncol, tol = (2000, TOL_2D) if dim == 2 else (160, TOL_3D)
+    check(x, nrm, [0.0, -1.5], 1, ncol, tol)
+    corner = np.eye(dim) @ R.T
+    x = R @ np.full(dim, 0.6)
+    one = wall_terms_at(x, corner, np.zeros(dim), 0, H, np.full(dim, -1.0))
+    two = wall_terms_at(x, np.r_[corner, corner], np.zeros(2 * dim), 0, H, np.full(dim, -1.0))
+    assert one[0] == pytest.approx(two[0], abs=1e-14)
+    assert np.allclose(one[1], two[1], atol=1e-14) and np.allclose(one[2], two[2], atol=1e-13)
+
+
 def _domain(dim, draw):
-    k = draw(st.integers(2, 6))
+    k = draw(st.integers(2, 12))
     raw = np.array([[draw(st.floats(-1, 1)) for _ in range(dim)] for _ in range(k)])
     assume(np.linalg.norm(raw, axis=1).min() > 0.1)
     nrm = unit(raw)
