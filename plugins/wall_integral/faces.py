@@ -34,7 +34,7 @@ _EPS = 1e-12
 PS2_ = np.ascontiguousarray(PS2[:, 1])  # Psi_s(2h) in 3D, per kernel
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _lval(tab, kid, di, q, shift):
     """Sum_k tab[k] q^(k + shift) for the kernel piece holding q (Laurent row, powers -3..9)."""
     pc = 0 if q < 1.0 else 1

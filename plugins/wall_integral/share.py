@@ -62,7 +62,7 @@ PLANE = np.zeros((2, 2, 2, NTAB + 1))
 _fill_plane_tables(PLANE)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _plane_lookup(kid, di, z):
     """(S(z), h Wbar(z)) by 4-point (cubic) Lagrange interpolation in PLANE; error < 1e-10."""
     u = z * (NTAB / 2.0)
