@@ -127,7 +127,7 @@ def test_reference_kernel_is_the_core_kernel():
 def test_single_plane_against_volume_quadrature_and_plane_formulas(dim, kid):
     n = unit([0.3, 1.0] if dim == 2 else [0.2, 0.3, 1.0])
     g = np.array([0.4, -9.81] if dim == 2 else [0.4, 0.3, -9.81])
-    for z in (0.0, 0.05, 0.3, 0.77, 1.0, 1.4, 1.95):
+    for z in (0.0, 0.05, 0.3, 0.77, 1.0, 1.4, 1.95) if dim == 2 else (0.0, 0.3, 1.0, 1.4, 1.95):
         x = z * n                       # plane n.x' = 0, distance z
         s, G, Tg = wall_terms_at(x, n[None], [0.0], kid, H, g)
         rs, rG, rT = reference(x, n[None], [0.0], kid, H, 2000 if dim == 2 else 160)
@@ -183,7 +183,7 @@ def test_box_corner_2d_and_its_mirror_symmetry(kid):
 @pytest.mark.parametrize("kid", [0, 1])
 def test_box_vertex_3d(kid):
     nrm, off = np.eye(3), np.zeros(3)
-    check([0.3, 0.4, 0.5], nrm, off, kid, 200, TOL_3D)             # planes on cell edges of the grid
+    check([0.3, 0.4, 0.5], nrm, off, kid, 160, TOL_3D)             # planes on cell edges (h/40)
     R = rotation(0.3, 0.7, -0.4)                                   # a generic orientation
     check(R @ [0.2, 0.9, 0.35], nrm @ R.T, off, kid, 160, TOL_3D)
     s0, G0, _ = wall_terms_at([1e-9] * 3, nrm, off, kid, H)
@@ -198,7 +198,7 @@ def test_points_on_walls_edges_and_vertices(kid):
     for x in ([0.0, 0.4], [0.0, 0.0], [0.0, 1.0]):
         check(x, np.eye(2), np.zeros(2), kid, 2000, TOL_2D)
     for x in ([0.0, 0.4, 0.5], [0.0, 0.0, 0.5], [0.0, 0.3, 0.0], [0.0, 0.0, 0.0]):
-        check(x, np.eye(3), np.zeros(3), kid, 200, TOL_3D)
+        check(x, np.eye(3), np.zeros(3), kid, 160, TOL_3D)
     # a 135-degree edge: points whose foot on one wall lies on the other wall's trace
     n = unit([[0.0, 0.0, 1.0], [0.0, 1.0, 1.0]])
     for z in (0.3, 1.1):
