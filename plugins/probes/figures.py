@@ -73,9 +73,12 @@ def lobovsky(tau, ps, band) -> dict:
     lo, hi = LOBOVSKY_WINDOW
     hi = min(hi, float(band[-1, 0]))
     sel = (tau >= lo) & (tau <= hi)
-    bsel = (band[:, 0] >= lo) & (band[:, 0] <= hi)
-    out = {"band_peak_lo_rhogH": float(band[bsel, 1].max()), "band_peak_median_rhogH": float(band[bsel, 2].max()),
-           "band_peak_hi_rhogH": float(band[bsel, 3].max())}
+    # the band over the window: its rows inside it and its values at the window's ends
+    inner = band[(band[:, 0] > lo) & (band[:, 0] < hi)]
+    ends = np.array([[x] + [np.interp(x, band[:, 0], band[:, c]) for c in (1, 2, 3)] for x in (lo, hi)])
+    win = np.concatenate([inner, ends])
+    out = {"band_peak_lo_rhogH": float(win[:, 1].max()), "band_peak_median_rhogH": float(win[:, 2].max()),
+           "band_peak_hi_rhogH": float(win[:, 3].max())}
     if not sel.any():
         return {**out, "in_band_fraction": float("nan"), "band_samples": 0, "peak_rhogH": float("nan"),
                 "peak_tau": float("nan"), "peak_in_band": False}
