@@ -125,14 +125,14 @@ def interpolate_pressure(points, pos, p, rho, m, kernel_id, h, gravity, wall, ou
 
 
 @njit(cache=True)
-def fluid_fraction(x, pos, rho, m, kernel_id, h, normals, offsets):
-    """phi(x) = sum_j V_j W(x - x_j), with mirror images across every wall plane (normals
-    (q, dim) into the fluid, offsets (q,): distance = n.x - offset) closer than 2h to x."""
+def _fraction(x, pos, rho, m, order, first, last, kernel_id, h, normals, offsets):
+    """phi(x) over the particles order[first:last] (see :func:`fluid_fraction`)."""
     dim = x.shape[0]
     rmax = SUPPORT * h
     nq = normals.shape[0]
     phi = 0.0
-    for j in range(pos.shape[0]):
+    for jj in range(first, last):
+        j = order[jj]
         v = m[j] / rho[j]
         r2 = 0.0
         for d in range(dim):
@@ -158,28 +158,50 @@ def fluid_fraction(x, pos, rho, m, kernel_id, h, normals, offsets):
 
 
 @njit(cache=True)
+def fluid_fraction(x, pos, rho, m, kernel_id, h, normals, offsets):
+    """phi(x) = sum_j V_j W(x - x_j), with mirror images across every wall plane (normals
+    (q, dim) into the fluid, offsets (q,): distance = n.x - offset) closer than 2h to x."""
+    order = np.arange(pos.shape[0])
+    return _fraction(x, pos, rho, m, order, 0, pos.shape[0], kernel_id, h, normals, offsets)
+
+
+@njit(cache=True)
 def depth_above(x0, up, ds, pos, rho, m, kernel_id, h, normals, offsets):
     """Water depth (m) above the floor point ``x0`` along the unit vector ``up``: see the
     module docstring. ``ds`` (m) is the scan step; candidates ``pos`` etc. should hold every
-    fluid particle within 2h of the vertical line."""
+    fluid particle within 2h of the vertical line.
+
+    The candidates are sorted by height, so each scan position only visits those within 2h
+    of it in height (a window that moves up with the scan).
+    """
     dim = x0.shape[0]
+    n = pos.shape[0]
+    rmax = SUPPORT * h
+    z = np.empty(n)
+    for j in range(n):
+        zj = 0.0
+        for d in range(dim):
+            zj += (pos[j, d] - x0[d]) * up[d]
+        z[j] = zj
+    order = np.argsort(z)
     x = x0.copy()
-    phi_prev = fluid_fraction(x, pos, rho, m, kernel_id, h, normals, offsets)
+    first, last = 0, 0
+    while last < n and z[order[last]] < rmax:
+        last += 1
+    phi_prev = _fraction(x, pos, rho, m, order, first, last, kernel_id, h, normals, offsets)
     if phi_prev < SURFACE_FRACTION:
         return 0.0
-    # nothing lies above the highest candidate plus the support
-    s_max = 0.0
-    for j in range(pos.shape[0]):
-        z = 0.0
-        for d in range(dim):
-            z += (pos[j, d] - x0[d]) * up[d]
-        s_max = max(s_max, z + SUPPORT * h)
+    s_max = z[order[n - 1]] + rmax  # nothing lies above the highest candidate plus the support
     s = 0.0
     while s < s_max:
         s_next = s + ds
         for d in range(dim):
             x[d] = x0[d] + s_next * up[d]
-        phi = fluid_fraction(x, pos, rho, m, kernel_id, h, normals, offsets)
+        while first < n and z[order[first]] <= s_next - rmax:
+            first += 1
+        while last < n and z[order[last]] < s_next + rmax:
+            last += 1
+        phi = _fraction(x, pos, rho, m, order, first, last, kernel_id, h, normals, offsets)
         if phi < SURFACE_FRACTION:
             return s + (phi_prev - SURFACE_FRACTION) / (phi_prev - phi) * ds
         s, phi_prev = s_next, phi
