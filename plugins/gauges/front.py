@@ -209,7 +209,7 @@ class FrontGauge:
 
     def wall_height(self, state) -> float:
         """eta (m): the depth-probe water depth one dx from the back wall."""
-        idx = np.empty(state.n, np.int64)
+        idx = np.empty(state.pos.shape[0], np.int64)
         c = select_near(np.ascontiguousarray(state.pos), state.kind, self.seg_a, self.seg_b, SUPPORT * self.h, idx)
         near = idx[:c]
         return float(depth_above(self.height_point, self.up, 0.25 * self.dx, state.pos[near], state.rho[near],

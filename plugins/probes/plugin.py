@@ -7,7 +7,8 @@ its peak and, where the probe names a shipped experiment, the error figures of
 :mod:`sphcore_plugins.probes.sampling` (numba, plain arrays).
 
 The simulation object is read only through: state (pos, rho, p, m, kind), t, step,
-output_dir, h, kernel_id, rho0, gravity, case (config, file, dim, dx, planes), restarting.
+output_dir, h, kernel_id, rho0, gravity, restarting, and case (config, file, dir, dim, dx,
+planes: its normals, offsets and distances()).
 """
 
 from __future__ import annotations
@@ -78,7 +79,7 @@ class ProbesPlugin:
                 seg_a.append(p.start)
                 seg_b.append(p.end)
         self.seg_a, self.seg_b = np.ascontiguousarray(seg_a), np.ascontiguousarray(seg_b)
-        self.idx = np.empty(sim.state.n, np.int64)
+        self.idx = np.empty(sim.state.pos.shape[0], np.int64)
         self.rho0 = float(sim.rho0)
         self.config, self.case_name = case.config, case.config["case"]["name"] or case.dir.name
         # a restart keeps the samples up to the checkpoint's step, found at the first output
@@ -88,7 +89,7 @@ class ProbesPlugin:
 
     def sample(self, state):
         """(values, dry) of every probe for the particle arrays of ``state``."""
-        n = state.n
+        n = state.pos.shape[0]
         if self.idx.shape[0] < n:
             self.idx = np.empty(n, np.int64)
         pos = np.ascontiguousarray(state.pos)
