@@ -255,3 +255,28 @@ def test_front_gauge_auto_on_a_tall_column_and_on_the_seed_case(tmp_path):
     assert info.value.key == "front_gauge.reference"
     gauge = runner.load(ROOT / "cases" / "dam_break")[1].get_plugin("front_gauge")
     assert gauge.references == ("martin_moyce_n2", "cruchaga")
+
+
+# ---------------------------------------------------------------------------- the shipped cases
+
+
+@pytest.mark.parametrize("case, sensors", [
+    ("dam_break_buchner", {"P1": 0.160, "P2": 0.584}),
+    ("dam_break_lobovsky", {"sensor2": 0.015}),
+])
+def test_pressure_cases_put_their_sensors_on_the_downstream_wall_at_the_published_heights(case, sensors):
+    from sphcore_plugins.gauges import reference
+
+    case_, pm = runner.load(ROOT / "cases" / case)
+    probes = {p.name: p for p in pm.get_plugin("probes").probes}
+    wall = case_.config["domain"]["max"][0]
+    for name, height in sensors.items():
+        p = probes[name]
+        assert p.mode == "wall" and (p.points[:, 0] == wall).all()
+        assert p.points[:, 1].mean() == pytest.approx(height, abs=1e-9)
+        series = reference.SERIES[p.reference]
+        assert series.sensor_height_m == pytest.approx(height) and p.height == series.height_m
+    # the column is H high and t_end reaches the end of the experiment's record
+    block = case_.config["blocks"][0]
+    assert block["max"][1] - block["min"][1] == pytest.approx(p.height)
+    assert case_.config["time"]["t_end"] * math.sqrt(9.81 / p.height) >= 6.5
