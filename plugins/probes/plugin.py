@@ -79,7 +79,9 @@ class ProbesPlugin:
                 seg_a.append(p.start)
                 seg_b.append(p.end)
         self.seg_a, self.seg_b = np.ascontiguousarray(seg_a), np.ascontiguousarray(seg_b)
-        self.idx = np.empty(sim.state.pos.shape[0], np.int64)
+        self.idx = np.empty(sim.state.pos.shape[0], np.int64)  # candidate indices, reused every sample
+        self.is_pressure = np.array([p.kind == "pressure" for p in self.probes])
+        self.work = [(np.zeros(len(p.points)), np.zeros(len(p.points))) for p in self.probes]
         self.rho0 = float(sim.rho0)
         self.config, self.case_name = case.config, case.config["case"]["name"] or case.dir.name
         # a restart keeps the samples up to the checkpoint's step, found at the first output
@@ -99,7 +101,7 @@ class ProbesPlugin:
         values, dry = np.zeros(len(self.probes)), np.zeros(len(self.probes), np.int8)
         for k, p in enumerate(self.probes):
             if p.kind == "pressure":
-                out_p, out_w = np.zeros(len(p.points)), np.zeros(len(p.points))
+                out_p, out_w = self.work[k]
                 interpolate_pressure(p.points, pc, prc, rc, mc, self.kernel_id, self.h, self.gravity,
                                      p.mode == "wall", out_p, out_w)
                 values[k] = out_p.mean()  # a dry part of a line sensor reads 0 (gauge)
@@ -139,8 +141,7 @@ class ProbesPlugin:
         if kept is None:
             self.file = None
             return
-        is_p = np.array([p.kind == "pressure" for p in self.probes])
-        vals = np.where(is_p[None, :], kept["pressure"], kept["depth"])
+        vals = np.where(self.is_pressure[None, :], kept["pressure"], kept["depth"])
         self.times, self.steps = list(kept["time"]), list(kept["step"])
         self.values, self.dry = list(vals), list(kept["dry"])
         if self.times:
@@ -153,7 +154,7 @@ class ProbesPlugin:
             if self.file is None or self.file.ds is None:
                 self.file = ProbeFile(sim.output_dir)
                 self.file.create(self.probes, sim.case.dim, self.rho0, self.g, self.config, self.case_name)
-            is_p = np.array([p.kind == "pressure" for p in self.probes])
+            is_p = self.is_pressure
             self.file.append(sim.t, sim.step, np.where(is_p, values, np.nan), np.where(is_p, np.nan, values), dry)
         except OutputError:
             self._failed = True
