@@ -29,11 +29,10 @@ import math
 
 import numpy as np
 
-from sphcore.hookspecs import hookimpl
-from sphcore.options import Option
-
 from sphcore.errors import CaseError
+from sphcore.hookspecs import hookimpl
 from sphcore.kernels import SUPPORT
+from sphcore.options import Option
 
 from sphcore_plugins.probes.sampling import depth_above, select_near
 
