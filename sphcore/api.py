@@ -1,7 +1,7 @@
 """Everything a plugin needs, from one module: ``from sphcore.api import ...``.
 
 - declaring: :data:`hookimpl` (mark hook implementations), :class:`Option` (declare a case
-  table's keys in ``sph_options``);
+  table's keys in ``sph_options``), :func:`validate_table` (validate a nested table);
 - errors: :class:`CaseError` (bad input: file, key, what was expected; exit 2),
   :class:`Instability` (stop the run: exit 1, last good output kept), :class:`OutputError`;
 - the run: :class:`RunContext` (what every hook receives as ``ctx``; its docstring lists
@@ -13,7 +13,7 @@
   :func:`particle_distance`;
 - neighbours and kernels for numba kernels: :class:`CellGrid` (its ``.view`` is a
   :class:`Grid`), :func:`cell_of`, :func:`cell_range` (the one neighbour walk),
-  :func:`kernel_w`, :func:`kernel_f`, :data:`SUPPORT`;
+  :func:`kernel_w`, :func:`kernel_f`, :data:`SUPPORT`, the kernel ids;
 - the equation of state: :mod:`sphcore.eos` as :data:`eos`;
 - output: :class:`ScheduledWriter` (base of a writer plugin: schedule, restart, write errors),
   :class:`Schedule`.
@@ -29,9 +29,9 @@ from .equations import Fields, WallTerms
 from .errors import CaseError, Instability, OutputError
 from .geometry import Planes, particle_distance, plane_distance
 from .hookspecs import hookimpl
-from .kernels import SUPPORT, kernel_f, kernel_w
+from .kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
 from .neighbours import CellGrid, Grid, cell_of, cell_range
-from .options import Option
+from .options import Option, validate_table
 from .params import Params
 from .particles import FLUID, GHOST, SPHERE, ParticleState, Sources
 from .schedule import Schedule, schedule_options
@@ -42,5 +42,6 @@ __all__ = [
     "RunContext", "Params", "ParticleState", "Sources", "Fields", "WallTerms", "FLUID", "SPHERE", "GHOST",
     "Planes", "plane_distance", "particle_distance",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
+    "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",
     "eos", "ScheduledWriter", "Schedule", "schedule_options",
 ]

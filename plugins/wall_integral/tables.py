@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.polynomial import polynomial as P
 
-from sphcore.kernels import CUBIC_SPLINE, WENDLAND_C2
+from sphcore.api import CUBIC_SPLINE, WENDLAND_C2
 
 OFF = 3      # column of power q^0
 NPOW = 13    # powers -3 .. 9

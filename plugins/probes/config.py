@@ -1,0 +1,154 @@
+"""The ``[probes]`` case table: its options and the probes it declares.
+
+    [probes]
+    every_dt = 1e-4                      # s; 0 (default): every step
+
+    [[probes.pressure]]
+    name = "P1"
+    start = [3.22, 0.1555]               # a line sensor (m), averaged over `points` samples,
+    end = [3.22, 0.1645]                 # or `point = [x, y]` for a point sensor
+    mode = "wall"                        # or "particle"
+    reference = "buchner_2002_P1"        # optional: a shipped experiment
+    H = 0.6                              # m, the column height that scales the reference
+
+    [[probes.depth]]
+    name = "H1"
+    point = [1.0, 0.0]                   # a point on the floor (m)
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from sphcore.api import CaseError, Option, validate_table
+
+from sphcore_plugins.gauges import reference
+
+from .sampling import line_points
+
+TABLE = "probes"
+NAME_RE = re.compile(r"^[A-Za-z0-9_-]+$")  # names become summary keys, CSV columns and file names
+ON_WALL_TOL = 1e-9  # m: a sensor this far outside a wall plane still counts as on it
+
+OPTIONS = {
+    "every_dt": Option(0.0, "float", "s", "simulated time between samples; 0 samples every step "
+                       "(impacts last a few ms: keep it well below that)", min=0.0),
+    "pressure": Option([], "table_list", doc="pressure sensors: [[probes.pressure]] tables (keys in PRESSURE)"),
+    "depth": Option([], "table_list", doc="water-depth gauges: [[probes.depth]] tables (keys in DEPTH)"),
+}
+
+#: keys of one ``[[probes.pressure]]`` entry
+PRESSURE = {
+    "name": Option(None, "str", doc="probe name (letters, digits, _ and -), unique in the case", nullable=True),
+    "point": Option(None, "vector", "m", "sensor point; or give start and end", nullable=True),
+    "start": Option(None, "vector", "m", "one end of a line sensor (a transducer's face seen edge-on)", nullable=True),
+    "end": Option(None, "vector", "m", "the other end of the line sensor", nullable=True),
+    "points": Option(5, "int", doc="sample points along a line sensor (centres of equal pieces), averaged",
+                     positive=True),
+    "mode": Option("wall", "str", doc="wall: particle pressures carried hydrostatically to the sensor (the "
+                   "pressure a wall carries); particle: the plain Shepard interpolation", choices=("wall", "particle")),
+    "reference": Option(None, "str", doc="shipped experiment to compare with: "
+                        + ", ".join(reference.SERIES), nullable=True),
+    "H": Option(None, "float", "m", "column height that scales the reference (p/(rho g H), t sqrt(g/H))",
+                positive=True, nullable=True),
+}
+
+#: keys of one ``[[probes.depth]]`` entry
+DEPTH = {
+    "name": PRESSURE["name"],
+    "point": Option(None, "vector", "m", "a point on the floor; the depth is measured above it along -g",
+                    nullable=True),
+}
+
+
+@dataclass
+class Probe:
+    """One sensor: ``kind`` "pressure" or "depth"; ``points`` (k, dim) where it samples;
+    ``start``/``end`` its extent (equal for a point); ``key`` its case key for messages."""
+
+    name: str
+    kind: str
+    key: str
+    start: np.ndarray
+    end: np.ndarray
+    points: np.ndarray
+    mode: str = ""
+    reference: str | None = None
+    height: float | None = None
+
+
+def _vec(file, key, value, dim):
+    if len(value) != dim:
+        raise CaseError(file, key, f"expected {dim} components for a {dim}D case, got {len(value)}")
+    return np.asarray(value, float)
+
+
+def _inside(case, file, key, pts):
+    d = case.planes.distances(np.atleast_2d(pts))
+    if (d < -ON_WALL_TOL).any():
+        i, q = np.argwhere(d < -ON_WALL_TOL)[0]
+        raise CaseError(file, key, f"point {np.atleast_2d(pts)[i].round(9).tolist()} lies outside the domain "
+                        f"(wall plane {q}, {-d[i, q]:.6g} m beyond it)")
+
+
+def _name(file, key, e, seen):
+    name = e["name"]
+    if name is None:
+        raise CaseError(file, f"{key}.name", "required: a name for the probe")
+    if not NAME_RE.match(name):
+        raise CaseError(file, f"{key}.name", f"expected letters, digits, _ or - only, got {name!r}")
+    if name in seen:
+        raise CaseError(file, f"{key}.name", f"probe name {name!r} is used twice")
+    seen.add(name)
+    return name
+
+
+def parse(case) -> tuple[float, list[Probe]]:
+    """(every_dt, probes) of ``case.config["probes"]``; every problem is a CaseError naming the key."""
+    cfg, file, dim = case.config[TABLE], case.file, case.dim
+    probes, seen = [], set()
+    for k, entry in enumerate(cfg["pressure"]):
+        key = f"{TABLE}.pressure[{k}]"
+        e = validate_table(PRESSURE, entry, file, key)
+        name = _name(file, key, e, seen)
+        if e["point"] is not None:
+            if e["start"] is not None or e["end"] is not None:
+                raise CaseError(file, f"{key}.point", "give either point or start and end, not both")
+            start = end = _vec(file, f"{key}.point", e["point"], dim)
+            pts = start[None, :].copy()
+            _inside(case, file, f"{key}.point", pts)
+        else:
+            if e["start"] is None or e["end"] is None:
+                missing = "start" if e["start"] is None else "end"
+                raise CaseError(file, f"{key}.{missing}", "required: a point, or both start and end of a line sensor")
+            start = _vec(file, f"{key}.start", e["start"], dim)
+            end = _vec(file, f"{key}.end", e["end"], dim)
+            if np.array_equal(start, end):
+                raise CaseError(file, f"{key}.end", "expected a point other than start (or use point = ...)")
+            _inside(case, file, f"{key}.start", start)
+            _inside(case, file, f"{key}.end", end)
+            pts = line_points(start, end, e["points"])
+        ref = e["reference"]
+        if ref is not None:
+            if ref not in reference.SERIES:
+                raise CaseError(file, f"{key}.reference", f"unknown reference {ref!r} (shipped: {', '.join(reference.SERIES)})")
+            if e["H"] is None:
+                raise CaseError(file, f"{key}.H", f"required with reference = {ref!r}: the column height (m) that "
+                                "scales p/(rho g H) and t sqrt(g/H)")
+        probes.append(Probe(name, "pressure", key, start, end, pts, e["mode"], ref, e["H"]))
+    for k, entry in enumerate(cfg["depth"]):
+        key = f"{TABLE}.depth[{k}]"
+        e = validate_table(DEPTH, entry, file, key)
+        name = _name(file, key, e, seen)
+        if e["point"] is None:
+            raise CaseError(file, f"{key}.point", "required: a point on the floor")
+        x0 = _vec(file, f"{key}.point", e["point"], dim)
+        _inside(case, file, f"{key}.point", x0)
+        probes.append(Probe(name, "depth", key, x0, x0.copy(), x0[None, :].copy()))
+    if not probes:
+        raise CaseError(file, TABLE, "no probe: add [[probes.pressure]] or [[probes.depth]] tables, "
+                        "or remove probes from plugins.use")
+    return cfg["every_dt"], probes

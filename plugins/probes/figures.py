@@ -1,0 +1,104 @@
+"""Error figures of a wall-pressure series against the shipped experiments.
+
+Used by the ``probes`` plugin (run summary) and by ``postprocessing/probes.py``, so both
+print the same numbers. Everything is in the experiments' dimensionless form:
+p* = p / (rho g H), time tau = t sqrt(g / H) (Buchner's t sqrt(g/H) and Lobovsky's t/T with
+T = sqrt(H/g) are the same number); H is the initial column height, t = 0 at gate release.
+
+Definitions
+-----------
+- **first rise**: the first time p* reaches ``RISE_THRESHOLD`` = 0.1, the time linearly
+  interpolated between the two samples that bracket that first crossing. Applied in the
+  same way to the experiment (its digitised points) and to the simulation (its samples);
+  a series that never reaches 0.1 has no rise (NaN). 0.1 lies above the digitised
+  experiments' noise before impact (|p*| < 0.03) and below every impact peak.
+- **Buchner MAE**: mean of |p*_sim - p*_exp| over the experiment's points with tau in
+  ``BUCHNER_WINDOW`` = [2.6, 5.5] that the simulation covers, the simulation linearly
+  interpolated onto the experiment's times.
+- **Lobovsky band fraction**: fraction of the simulation's samples with tau in
+  ``LOBOVSKY_WINDOW`` = [2, 7] whose p* lies inside the experiment's 2.5-97.5 % band, the
+  band linearly interpolated onto the simulation's times. **Peak**: the largest p* of the
+  simulation in that window, against the band's peak range [max p2.5, max p97.5] over the
+  same window (a peak inside that range is as high as the experiment's spread allows).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from sphcore_plugins.gauges import reference
+
+RISE_THRESHOLD = 0.1  # p / (rho g H) that marks the first rise
+BUCHNER_WINDOW = (2.6, 5.5)  # t sqrt(g/H) over which the MAE is taken
+LOBOVSKY_WINDOW = (2.0, 7.0)  # t / sqrt(H/g) over which the band fraction and the peak are taken
+
+
+def scaled(t, p, rho, g, height):
+    """(tau, p*) = (t sqrt(g/H), p / (rho g H)) as float arrays."""
+    t, p = np.asarray(t, float), np.asarray(p, float)
+    return t * math.sqrt(g / height), p / (rho * g * height)
+
+
+def first_rise(tau, p, threshold=RISE_THRESHOLD) -> float:
+    """First time ``p`` reaches ``threshold`` (interpolated between the bracketing samples); NaN if never."""
+    tau, p = np.asarray(tau, float), np.asarray(p, float)
+    above = np.flatnonzero(p >= threshold)
+    if above.size == 0:
+        return float("nan")
+    i = int(above[0])
+    if i == 0:
+        return float(tau[0])
+    t0, t1, p0, p1 = tau[i - 1], tau[i], p[i - 1], p[i]
+    return float(t0 + (threshold - p0) / (p1 - p0) * (t1 - t0))
+
+
+def buchner(tau, ps, exp) -> dict:
+    """MAE over ``BUCHNER_WINDOW`` and first rise of (tau, p*) against ``exp`` rows (tau, p*)."""
+    lo, hi = BUCHNER_WINDOW
+    sel = (exp[:, 0] >= lo) & (exp[:, 0] <= hi)
+    if tau.size:
+        sel &= (exp[:, 0] >= tau[0]) & (exp[:, 0] <= tau[-1])
+    else:
+        sel[:] = False
+    mae = float(np.mean(np.abs(np.interp(exp[sel, 0], tau, ps) - exp[sel, 1]))) if sel.any() else float("nan")
+    rise, rise_exp = first_rise(tau, ps), first_rise(exp[:, 0], exp[:, 1])
+    return {"mae_rhogH": mae, "mae_points": int(sel.sum()), "rise_tau": rise, "rise_tau_exp": rise_exp,
+            "rise_dtau": rise - rise_exp}
+
+
+def lobovsky(tau, ps, band) -> dict:
+    """Band fraction and peak over ``LOBOVSKY_WINDOW`` of (tau, p*) against ``band`` rows (tau, p2.5, median, p97.5)."""
+    lo, hi = LOBOVSKY_WINDOW
+    hi = min(hi, float(band[-1, 0]))
+    sel = (tau >= lo) & (tau <= hi)
+    # the band over the window: its rows inside it and its values at the window's ends
+    inner = band[(band[:, 0] > lo) & (band[:, 0] < hi)]
+    ends = np.array([[x] + [np.interp(x, band[:, 0], band[:, c]) for c in (1, 2, 3)] for x in (lo, hi)])
+    win = np.concatenate([inner, ends])
+    out = {"band_peak_lo_rhogH": float(win[:, 1].max()), "band_peak_median_rhogH": float(win[:, 2].max()),
+           "band_peak_hi_rhogH": float(win[:, 3].max())}
+    if not sel.any():
+        return {**out, "in_band_fraction": float("nan"), "band_samples": 0, "peak_rhogH": float("nan"),
+                "peak_tau": float("nan"), "peak_in_band": False}
+    b_lo = np.interp(tau[sel], band[:, 0], band[:, 1])
+    b_hi = np.interp(tau[sel], band[:, 0], band[:, 3])
+    inside = (ps[sel] >= b_lo) & (ps[sel] <= b_hi)
+    k = int(np.argmax(ps[sel]))
+    peak = float(ps[sel][k])
+    return {**out, "in_band_fraction": float(inside.mean()), "band_samples": int(sel.sum()), "peak_rhogH": peak,
+            "peak_tau": float(tau[sel][k]),
+            "peak_in_band": bool(out["band_peak_lo_rhogH"] <= peak <= out["band_peak_hi_rhogH"])}
+
+
+def errors(name, t, p, rho, g, height) -> dict:
+    """Error figures of the series (t in s, p in Pa) against the shipped reference ``name``.
+
+    ``rho`` (kg/m^3), ``g`` (m/s^2) and ``height`` (m, the column height H) set the scaling.
+    Keys without a prefix (the plugin prefixes ``probe_<name>_``).
+    """
+    tau, ps = scaled(t, p, rho, g, height)
+    kind = reference.SERIES[name].kind
+    data = reference.series(name)
+    return buchner(tau, ps, data) if kind == "buchner" else lobovsky(tau, ps, data)

@@ -1,0 +1,172 @@
+"""Where probe samples go: ``probes.nc`` (appended and synced per sample) and ``probes.csv``.
+
+``probes.nc`` is netCDF-3 CDF-5 like ``particles.nc`` (readable while the run writes, a
+killed run keeps every synced sample; see :mod:`sphcore_plugins.netcdf`). Dimensions
+``time`` (unlimited) x ``probe``; ``pressure`` (Pa) holds NaN in the columns of depth probes
+and ``depth`` (m) NaN in those of pressure probes; ``dry`` is 1 where no fluid particle was
+within the kernel support of any sample point (pressure 0, depth 0). The probes' names,
+kinds, modes, extents (``probe_start``/``probe_end``, m), column heights H and reference
+names are variables along ``probe``; ``rho0`` and ``g`` are global attributes.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+from pathlib import Path
+
+import netCDF4
+import numpy as np
+
+import sphcore
+from sphcore.api import OutputError
+
+from sphcore_plugins.netcdf import FORMAT, _rewrite_first, case_attributes
+
+FILE_NAME = "probes.nc"
+CSV_NAME = "probes.csv"
+KIND_CODES = {"pressure": 0, "depth": 1}
+MODE_CODES = {"": -1, "wall": 0, "particle": 1}
+
+
+def _fail(path, what, err):
+    return OutputError(f"{path}: cannot {what}: {getattr(err, 'strerror', None) or err}")
+
+
+def _chars(names):
+    width = max(1, max(len(s) for s in names))
+    return netCDF4.stringtochar(np.array(list(names), dtype=f"S{width}")), width
+
+
+class ProbeFile:
+    """``probes.nc`` of one run: create at the first sample, append, sync, reopen on restart."""
+
+    def __init__(self, directory: Path):
+        self.path = Path(directory) / FILE_NAME
+        self.ds: netCDF4.Dataset | None = None
+        self.row = 0
+
+    def create(self, probes, dim, rho0, g, config, case_name=""):
+        try:
+            ds = netCDF4.Dataset(self.path, "w", format=FORMAT)
+        except (OSError, RuntimeError) as err:
+            raise _fail(self.path, "create the netCDF file", err) from err
+        try:
+            ds.set_auto_maskandscale(False)
+            ds.createDimension("time", None)
+            ds.createDimension("probe", len(probes))
+            ds.createDimension("spatial", dim)
+            names, width = _chars([p.name for p in probes])
+            refs, rwidth = _chars([p.reference or "" for p in probes])
+            ds.createDimension("name_strlen", width)
+            ds.createDimension("reference_strlen", rwidth)
+            ds.setncatts({
+                "Conventions": "CF-1.8",
+                "title": f"sphcore probes: {case_name}",
+                "source": f"sphcore {sphcore.__version__}",
+                "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} created by sphcore",
+                "comment": "pressure: Shepard kernel interpolation of the fluid within 2h (wall mode: hydrostatic "
+                           "extrapolation to the sensor); depth: first height above the floor point where the "
+                           "fluid fraction drops below 0.5; see sphcore_plugins.probes.sampling",
+                "rho0": np.float64(rho0), "g": np.float64(g),
+                **case_attributes(config or {}),
+            })
+            v = ds.createVariable("time", "f8", ("time",), fill_value=False)
+            v.setncatts({"units": "s", "standard_name": "time", "long_name": "simulated time since gate release"})
+            ds.createVariable("step", "i8", ("time",), fill_value=False).setncatts(
+                {"units": "1", "long_name": "time step index"})
+            ds.createVariable("pressure", "f8", ("time", "probe"), fill_value=False).setncatts(
+                {"units": "Pa", "long_name": "gauge pressure at the sensor (NaN for depth probes)"})
+            ds.createVariable("depth", "f8", ("time", "probe"), fill_value=False).setncatts(
+                {"units": "m", "long_name": "water depth above the probe point along -g (NaN for pressure probes)"})
+            ds.createVariable("dry", "i1", ("time", "probe"), fill_value=False).setncatts(
+                {"units": "1", "long_name": "1: no fluid particle within 2h of any sample point (value 0)",
+                 "flag_values": np.array([0, 1], np.int8), "flag_meanings": "wet dry"})
+            ds.createVariable("probe_name", "S1", ("probe", "name_strlen"))[:] = names
+            ds.createVariable("probe_reference", "S1", ("probe", "reference_strlen"))[:] = refs
+            kv = ds.createVariable("probe_kind", "i1", ("probe",), fill_value=False)
+            kv.setncatts({"units": "1", "flag_values": np.array(list(KIND_CODES.values()), np.int8),
+                          "flag_meanings": " ".join(KIND_CODES)})
+            kv[:] = [KIND_CODES[p.kind] for p in probes]
+            mv = ds.createVariable("probe_mode", "i1", ("probe",), fill_value=False)
+            mv.setncatts({"units": "1", "flag_values": np.array([0, 1], np.int8), "flag_meanings": "wall particle",
+                          "comment": "-1 for depth probes"})
+            mv[:] = [MODE_CODES[p.mode] for p in probes]
+            for name, field, doc in (("probe_start", "start", "one end of the sensor (a point sensor: the point)"),
+                                     ("probe_end", "end", "other end of the sensor (a point sensor: the point)")):
+                var = ds.createVariable(name, "f8", ("probe", "spatial"), fill_value=False)
+                var.setncatts({"units": "m", "long_name": doc})
+                var[:] = np.array([getattr(p, field) for p in probes])
+            nv = ds.createVariable("probe_points", "i4", ("probe",), fill_value=False)
+            nv.setncatts({"units": "1", "long_name": "sample points averaged along the sensor"})
+            nv[:] = [len(p.points) for p in probes]
+            hv = ds.createVariable("probe_H", "f8", ("probe",), fill_value=False)
+            hv.setncatts({"units": "m", "long_name": "column height that scales the reference (NaN: none)"})
+            hv[:] = [np.nan if p.height is None else p.height for p in probes]
+            ds.sync()
+        except (OSError, RuntimeError) as err:
+            del ds  # not close(): see sphcore_plugins.netcdf.NetcdfWriter._abandon
+            raise _fail(self.path, "write the netCDF header", err) from err
+        self.ds, self.row = ds, 0
+
+    def append(self, t, step, pressure, depth, dry):
+        """One sample: arrays along ``probe``; synced before returning."""
+        try:
+            ds = self.ds
+            ds["time"][self.row] = np.nan  # a sample with a time is complete (see netcdf.py)
+            ds["step"][self.row] = int(step)
+            ds["pressure"][self.row] = pressure
+            ds["depth"][self.row] = depth
+            ds["dry"][self.row] = dry
+            ds["time"][self.row] = float(t)
+            ds.sync()
+        except (OSError, RuntimeError) as err:
+            self.ds = None  # let the collector close it (see netcdf.py)
+            raise _fail(self.path, f"write the sample at step {step}", err) from err
+        self.row += 1
+
+    def reopen(self, last_step) -> dict | None:
+        """Reopen an earlier run's file, keep the leading complete samples with step <= ``last_step``
+        and go on appending; returns the kept series {time, step, pressure, depth, dry}, or None
+        when there is no file."""
+        if not self.path.exists():
+            return None
+        try:
+            with netCDF4.Dataset(self.path) as src:
+                src.set_auto_maskandscale(False)
+                steps, times = src["step"][:], src["time"][:]
+            ok = np.isfinite(times) & (steps <= last_step)
+            keep = len(ok) if ok.all() else int(np.argmin(ok))
+            if keep < len(steps):
+                _rewrite_first(self.path, keep)
+            ds = netCDF4.Dataset(self.path, "a")
+            ds.set_auto_maskandscale(False)
+            kept = {name: np.array(ds[name][:keep]) for name in ("time", "step", "pressure", "depth", "dry")}
+        except (OSError, RuntimeError, KeyError, IndexError) as err:
+            raise _fail(self.path, "reopen the netCDF file to restart", err) from err
+        self.ds, self.row = ds, keep
+        return kept
+
+    def close(self):
+        if self.ds is None:
+            return
+        ds, self.ds = self.ds, None
+        try:
+            ds.close()
+        except (OSError, RuntimeError) as err:
+            raise _fail(self.path, "close", err) from err
+
+
+def write_csv(path: Path, probes, t, values):
+    """``probes.csv``: time_s, then one column per probe (``<name>_pa`` or ``<name>_m``);
+    written to a temporary name and renamed, so a reader never sees half a file."""
+    path = Path(path)
+    header = ",".join(["time_s"] + [f"{p.name}_{'pa' if p.kind == 'pressure' else 'm'}" for p in probes])
+    tmp = path.with_name(f".{path.name}.tmp")
+    data = np.column_stack([np.asarray(t, float), np.asarray(values, float).reshape(len(t), len(probes))])
+    try:
+        np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt="%.10g")
+        os.replace(tmp, path)
+    except OSError as err:
+        tmp.unlink(missing_ok=True)
+        raise _fail(path, "write", err) from err
