@@ -59,7 +59,7 @@ class Forces:
         self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
         self._L = np.zeros((1, 3, 3))
         self._shepard = np.zeros(1)
-        self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), False)
+        self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), False)
 
     # -- pieces -----------------------------------------------------------------------
 
@@ -94,11 +94,12 @@ class Forces:
             return self._wall
         n, dim = self.ctx.state.n, self.ctx.params.dim
         if self._wall.share.shape[0] != n:
-            self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), True)
+            self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)), True)
         w = self._wall
         w.share[:] = 0.0
         w.grad[:] = 0.0
         w.hydro[:] = 0.0
+        w.normals[:] = 0.0
         self.hook.sph_wall_terms(ctx=self.ctx, terms=w)
         self.ctx.counters["wall_terms"] += 1
         return w

@@ -97,7 +97,9 @@ def sph_wall_terms(ctx, terms):
     :class:`sphcore.equations.WallTerms` of arrays zeroed by the core: ``terms.share`` (n,)
     the wall's share of each particle's kernel support, ``terms.grad`` (n, dim) its
     gradient (1/m, towards the wall), ``terms.hydro`` (n, dim) the hydrostatic moment of the
-    wall pressure (m/s^2). Add (``+=``) what your walls contribute, so that several wall
+    wall pressure (m/s^2), ``terms.normals`` (n, dim, dim) the projector onto the normals of
+    the walls within each particle's support. Add (``+=``) what your walls contribute to the
+    first three and widen the projector to your walls' normals, so that several wall
     plugins combine. The core then completes the continuity and momentum sums with them
     and renormalises by the fluid share (see :mod:`sphcore.equations`).
     """

@@ -27,6 +27,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from sphcore.api import particle_distance, plane_distance
+
 from .faces import PS2_, _face2, _face3, _lval, _segment2
 from .tables import PS, PW, PW2
 
@@ -81,12 +83,6 @@ def _plane_lookup(kid, di, z):
 
 # ---------------------------------------------------------------- drivers
 
-@njit(cache=True)
-def _dist(normals, offsets, k, x0, x1, x2):
-    d = normals[k, 0] * x0 + normals[k, 1] * x1 - offsets[k]
-    if normals.shape[1] == 3:
-        d += normals[k, 2] * x2
-    return d
 
 
 @njit(cache=True)
@@ -96,11 +92,11 @@ def _degenerate(x0, x1, x2, normals, offsets, h):
     two walls at once (2D corner)."""
     nk, dim = normals.shape
     for k in range(nk):
-        dk = max(_dist(normals, offsets, k, x0, x1, x2), 0.0) / h
+        dk = max(plane_distance(normals, offsets, k, x0, x1, x2), 0.0) / h
         if dk >= 2.0:
             continue
         for j in range(nk):
-            dj = max(_dist(normals, offsets, j, x0, x1, x2), 0.0) / h
+            dj = max(plane_distance(normals, offsets, j, x0, x1, x2), 0.0) / h
             if j == k or dj >= 2.0:
                 continue
             nn = normals[j, 0] * normals[k, 0] + normals[j, 1] * normals[k, 1]
@@ -126,12 +122,12 @@ def wall_point(x0, x1, x2, normals, offsets, kernel_id, h, g0, g1, g2):
     """
     nact = 0
     for k in range(normals.shape[0]):
-        if _dist(normals, offsets, k, x0, x1, x2) < 2.0 * h:
+        if plane_distance(normals, offsets, k, x0, x1, x2) < 2.0 * h:
             nact += 1
     if nact >= 2 and _degenerate(x0, x1, x2, normals, offsets, h):
         v0, v1, v2 = 0.31, 0.57, 0.27 * (normals.shape[1] == 3)
         for k in range(normals.shape[0]):
-            if _dist(normals, offsets, k, x0, x1, x2) < 1e-9 * h:
+            if plane_distance(normals, offsets, k, x0, x1, x2) < 1e-9 * h:
                 v0 += normals[k, 0]
                 v1 += normals[k, 1]
                 if normals.shape[1] == 3:
@@ -208,10 +204,7 @@ def wall_terms(pos, normals, offsets, kernel_id, h, gravity, share, grad, hydro)
         x2 = pos[i, 2] if dim == 3 else 0.0
         dmin = np.inf
         for k in range(nk):
-            dk = normals[k, 0] * pos[i, 0] + normals[k, 1] * pos[i, 1] - offsets[k]
-            if dim == 3:
-                dk += normals[k, 2] * x2
-            dmin = min(dmin, dk)
+            dmin = min(dmin, particle_distance(normals, offsets, k, pos, i))
         if dmin >= 2.0 * h:  # far from every wall: the common case, kept cheap
             share[i] = 0.0
             for c in range(dim):

@@ -1,0 +1,54 @@
+"""The projector onto the normals of the walls near each particle (``WallTerms.normals``).
+
+It tells the core in which directions a particle's missing kernel support is wall (to be
+completed with the wall pressure) rather than free surface (left empty): n n^T within 2h of
+one plane, the identity where planes of independent normals meet (corners, edges).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from sphcore.api import particle_distance
+
+TOL = 1e-6  # a normal within this (squared) of the span already held adds no direction
+
+
+@njit(cache=True, inline="always")
+def _add_direction(basis, count, dim, v0, v1, v2):
+    """Gram-Schmidt: add (v0, v1, v2) to the orthonormal rows basis[:count]; new count."""
+    for b in range(count):
+        c = v0 * basis[b, 0] + v1 * basis[b, 1] + v2 * basis[b, 2]
+        v0 -= c * basis[b, 0]
+        v1 -= c * basis[b, 1]
+        v2 -= c * basis[b, 2]
+    nn = v0 * v0 + v1 * v1 + v2 * v2
+    if nn <= TOL or count >= dim:
+        return count
+    r = 1.0 / np.sqrt(nn)
+    basis[count, 0] = v0 * r
+    basis[count, 1] = v1 * r
+    basis[count, 2] = v2 * r
+    return count + 1
+
+
+@njit(cache=True, parallel=True)
+def near_wall_projector(pos, normals, offsets, support, q):
+    """q[i] (dim, dim) <- projector onto span(q[i], normals of the planes with d < support)."""
+    n, dim = pos.shape
+    for i in prange(n):
+        basis = np.zeros((3, 3))
+        count = 0
+        for a in range(dim):  # what another wall plugin put there: its columns span its walls
+            count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a], q[i, 2, a] if dim == 3 else 0.0)
+        for k in range(normals.shape[0]):
+            if particle_distance(normals, offsets, k, pos, i) < support:
+                count = _add_direction(basis, count, dim, normals[k, 0], normals[k, 1],
+                                       normals[k, 2] if dim == 3 else 0.0)
+        for a in range(dim):
+            for b in range(dim):
+                s = 0.0
+                for c in range(count):
+                    s += basis[c, a] * basis[c, b]
+                q[i, a, b] = s
