@@ -24,6 +24,8 @@ CORE: dict[str, dict[str, O]] = {
     "particles": {
         "dx": O(0.01, "float", "m", "initial particle spacing", positive=True),
         "radius": O(None, "float", "m", "particle radius for wall contact; dx/2 when unset", positive=True, nullable=True),
+        "memory_limit_gib": O(None, "float", "GiB", "refuse a case whose estimated memory exceeds this; the "
+                              "machine's available memory when unset", positive=True, nullable=True),
     },
     "fluid": {
         "rho0": O(1000.0, "float", "kg/m^3", "reference density", positive=True),
@@ -44,7 +46,8 @@ CORE: dict[str, dict[str, O]] = {
     },
     "kernel": {
         "name": O("wendland_c2", "str", doc="smoothing kernel", choices=("wendland_c2", "cubic_spline")),
-        "h_over_dx": O(1.3, "float", doc="smoothing length h in units of dx (support radius 2h)", positive=True),
+        "h_over_dx": O(1.3, "float", doc="smoothing length h in units of dx (support radius 2h); from 0.5 "
+                       "(the support reaches the nearest neighbour) to 5", positive=True, min=0.5, extra={"max": 5.0}),
     },
     "eos": {
         "c0": O(None, "float", "m/s", "reference sound speed; derived from c0_factor when unset", positive=True, nullable=True),
@@ -69,6 +72,8 @@ CORE: dict[str, dict[str, O]] = {
         "force_factor": O(0.25, "float", doc="dt <= force_factor * sqrt(h / |a|max)", positive=True),
         "viscous_factor": O(0.125, "float", doc="dt <= viscous_factor * h^2 / nu", positive=True),
         "dt_max": O(None, "float", "s", "upper bound on the adaptive step", positive=True, nullable=True),
+        "max_steps": O(100_000_000, "int", doc="refuse a case whose first step predicts more steps than this to "
+                       "reach t_end (a time step too small to finish)", positive=True),
     },
     "checks": {
         "rho_min": O(0.5, "float", doc="stop when a density falls below rho_min * rho0", positive=True),
@@ -86,9 +91,13 @@ CORE: dict[str, dict[str, O]] = {
         "use": O([], "str_list", doc="plugins to load, by entry-point name (e.g. reflective, ghost, vtu)"),
     },
     "output": {
-        "dir": O("output", "str", doc="output directory, relative to the case directory"),
+        "dir": O("output", "str", doc="output directory, a sub-directory of the case directory (elsewhere: sph run --output)"),
         "progress": O("auto", "str", doc="progress display", choices=("auto", "bar", "log", "off")),
         "log_interval_s": O(10.0, "float", "s", "wall time between progress lines when not on a terminal", positive=True),
+        "checkpoint_every_s": O(300.0, "float", "s", "wall time between periodic checkpoints (checkpoint.npz, "
+                                "replaced atomically); 0 is off", min=0.0),
+        "checkpoint_every_dt": O(None, "float", "s", "simulated time between periodic checkpoints, as well as "
+                                 "checkpoint_every_s; off when unset", positive=True, nullable=True),
     },
 }
 

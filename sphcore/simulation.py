@@ -275,6 +275,9 @@ class Simulation:
             self.compute_rates()
             self.integrator.fresh = True
         self.dt = self.choose_dt()
+        if self.t + self.dt == self.t:  # issue 13: a step below the round-off of t would hang the run
+            raise Instability(self.step, self.t, -1, f"time step {self.dt:.3g} s is below the round-off of t: "
+                              "time cannot advance")
         self.integrator.step(self, self.dt)
         self.t += self.dt
         self.step += 1
