@@ -65,11 +65,14 @@ def check_memory(case) -> None:
         if c < 1:
             raise CaseError(case.file, f"blocks[{k}]", f"the block holds no particle at dx = {case.dx} m")
     if need > limit:
+        counts = block_counts(case)
+        big = max(range(len(counts)), key=counts.__getitem__)
+        key = f"blocks[{big}].count" if case.blocks[big]["count"] is not None else "particles.dx"
         where = ("particles.memory_limit_gib" if limit_gib is not None
                  else "the memory available (set particles.memory_limit_gib to override)")
-        raise CaseError(case.file, "particles.dx", f"dx = {case.dx:g} m gives {n:.3g} particles needing about "
+        raise CaseError(case.file, key, f"dx = {case.dx:g} m gives {n:.3g} particles needing about "
                         f"{need / 2.0**30:.3g} GiB, more than {limit / 2.0**30:.3g} GiB, {where}; "
-                        "expected a larger dx or smaller blocks")
+                        "expected fewer particles (a larger dx or smaller blocks)")
 
 
 def check_first_step(sim) -> float:

@@ -105,6 +105,18 @@ def _inside(out: Path, rel: str) -> Path | None:
     return p
 
 
+def _linked(out: Path, rel: str) -> bool:
+    """Whether a link lies on the way to ``out/rel`` (a harmless bad entry is just skipped)."""
+    p = out
+    for part in Path(rel).parts:
+        if part in ("..", ".") or os.path.isabs(part):
+            return False
+        p = p / part
+        if p.is_symlink():
+            return True
+    return False
+
+
 class Manifest:
     """Keeps the marker's list of sph's files up to date during one run segment."""
 
@@ -147,7 +159,12 @@ class Manifest:
 
 def _remove_listed(out: Path, marker: dict) -> list[str]:
     """Delete the marker's files (regular files only) and its directories left empty;
-    returns what stays (not sph's)."""
+    returns what stays (not sph's). A listed path that has become a symbolic link (or lies
+    behind one) is refused before anything is deleted: the new run would write through it."""
+    for rel in marker["files"] + marker["dirs"]:
+        if isinstance(rel, str) and _inside(out, rel) is None and _linked(out, rel):
+            raise OutputError(f"refusing to overwrite {out}: {rel} is a symbolic link now (sph never deletes or "
+                              "writes through one); remove the link or pass --output DIR")
     for rel in marker["files"]:
         p = _inside(out, rel)
         if p is not None and p.is_file() and not p.is_symlink():

@@ -17,6 +17,7 @@ import numpy as np
 
 from sphcore.hookspecs import hookimpl
 from sphcore.options import Option
+from sphcore.outdir import write_atomically
 
 from . import reference
 
@@ -113,8 +114,9 @@ class FrontGauge:
             return None
         t, x = np.array(self.samples).T
         if sim.output_dir is not None and sim.output_dir.exists():
-            np.savetxt(sim.output_dir / "front.csv", np.c_[t, x], delimiter=",", header="t_s,x_front_m",
-                       comments="", fmt="%.8g")
+            # atomically (issue 13): a full disk keeps the previous front.csv, no temporary left
+            write_atomically(sim.output_dir / "front.csv", lambda tmp: np.savetxt(
+                tmp, np.c_[t, x], delimiter=",", header="t_s,x_front_m", comments="", fmt="%.8g"))
         out = compare(t, x, self.a, self.x_wall - 2 * float(np.median(sim.state.radius)))
         out["column_width_m"] = self.a
         return out
