@@ -93,6 +93,9 @@ def main(argv=None) -> int:
             print(f"{case.file}: ok: {case.dim}D, {sim.state.n} particles, {case.planes.count} wall planes, "
                   f"h = {sim.h:.4g} m, c0 = {sim.c0:.4g} m/s, first dt ~ {dt:.3g} s, "
                   f"plugins: {', '.join(case.config['plugins']['use']) or 'none'}; output: {out.resolve()}")
+            if out.exists() and (not out.is_dir() or any(out.iterdir())):  # what run would say about it
+                print(f"{out.resolve()}: exists and is not empty: sph run needs --overwrite (sph's files only), "
+                      "--restart or --output DIR")
             return 0
         summary = runner.run(args.case_dir, args.output, args.overrides, args.t_end, args.overwrite,
                              args.restart, args.progress)

@@ -35,6 +35,10 @@ class Progress:
             # kernels on a first run (~10 s), which would otherwise inflate the first ETA
             self.steps0, self.t0 = sim.step, sim.t
             self.start = self.last_log = self.last_draw = time.perf_counter()
+            if self.bar is not None:  # tqdm's own clock and rate start here too
+                self.bar.reset(total=self.t_end)
+                self.bar.initial = self.bar.n = min(sim.t, self.t_end)
+                self.bar.refresh()
             return
         if self.mode == "off":
             return

@@ -545,3 +545,62 @@ def test_full_disk_at_every_write_point(dam, tmp_path, capsys, monkeypatch, poin
         assert_same_as_reference(out, ref)
     s = json.loads((out / "summary.json").read_text())
     assert s["status"] == "completed" and s["t"] == 0.3
+
+
+# ----------------------------------------------------------------------------------------
+# 6. set-up interrupted, compilation announced, a step that cannot advance time
+# ----------------------------------------------------------------------------------------
+
+
+def test_ctrl_c_during_set_up_is_one_line_and_writes_nothing(tmp_path, capsys, monkeypatch):
+    case_dir = write_case(tmp_path / "case", GOOD_CASE)
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("sphcore.runner.Simulation", interrupted)
+    before = snapshot(tmp_path)
+    status, _, err = cli_main(capsys, "run", case_dir, "--progress", "off")
+    assert status == 128 + signal.SIGINT
+    assert err.strip() == "sph: error: interrupted during set-up; nothing written"
+    assert snapshot(tmp_path) == before
+
+
+def test_first_run_says_it_compiles(tmp_path, capsys, monkeypatch):
+    case_dir = write_case(tmp_path / "case", GOOD_CASE)
+    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda: False)
+    status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log")
+    assert status == 0 and "[sph] compiling kernels, once" in err
+    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda: True)
+    status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log", "--output", tmp_path / "again")
+    assert status == 0 and "compiling" not in err
+
+
+def test_kernels_cached_finds_the_cache():
+    from sphcore import runner
+
+    assert runner.kernels_cached()  # the runs above compiled, and numba cached, the force kernel
+
+
+def test_a_step_below_the_round_off_of_t_is_an_instability(tmp_path):
+    from conftest import make_sim
+
+    from sphcore.errors import Instability
+
+    sim = make_sim(write_case(tmp_path / "case", GOOD_CASE), ["time.dt=1e-4", "time.t_end=1e20"])
+    sim.t = 1e16  # ulp(1e16) = 2: t + 1e-4 == t
+    with pytest.raises(Instability, match="below the round-off of t"):
+        sim.advance()
+
+
+def test_checkpoint_clock():
+    from sphcore.resume import CheckpointClock
+
+    clock = CheckpointClock(0, 0.1, t0=0.25)  # simulated time only, restarted at 0.25 s
+    fired = [t for t in np.arange(0.26, 0.71, 0.01).round(2) if clock.due(float(t))]
+    assert fired == [0.3, 0.4, 0.5, 0.6, 0.7]
+    clock = CheckpointClock(0.05, None, t0=0.0)  # wall time only
+    assert not clock.due(1.0)
+    time.sleep(0.06)
+    assert clock.due(1.0) and not clock.due(1.0)
+    assert not any(CheckpointClock(0, None, 0.0).due(t) for t in (0.1, 1.0, 100.0))  # both off
