@@ -290,9 +290,10 @@ def assert_same_as_reference(out: Path, ref: Path):
 def kill_and_restart(case_dir: Path, out: Path, kills: int, rng: random.Random, stepping_s: float) -> int:
     """Start the run, SIGKILL it at a random moment, restart and kill again ``kills`` times,
     then restart to the end. A kill lands during start-up (one in four, once a checkpoint
-    exists) or while stepping, writing frames or a checkpoint: uniformly within half of
-    ``stepping_s`` (the uninterrupted run's stepping time) after the process prepared its
-    output directory (rewrote the marker). Returns the kills that hit a running process."""
+    exists) or while stepping, writing frames or a checkpoint: uniformly within
+    2 ``stepping_s`` / (kills + 1) (``stepping_s``: the uninterrupted run's stepping time)
+    after the process prepared its output directory (rewrote the marker). Returns the kills
+    that hit a running process."""
     hit = 0
     marker = out / outdir.MARKER
     for k in range(kills + 1):
@@ -315,7 +316,8 @@ def kill_and_restart(case_dir: Path, out: Path, kills: int, rng: random.Random, 
                                                    and (out / "checkpoint.npz").exists()):
                     assert time.monotonic() < deadline, "the run did not start"
                     time.sleep(0.002)
-                time.sleep(rng.uniform(0.0, 0.5 * stepping_s))
+                # spread over the run: on average the kills together cover all of it
+                time.sleep(rng.uniform(0.0, 2.0 * stepping_s / (kills + 1)))
             if proc.poll() is None:
                 proc.send_signal(signal.SIGKILL)
                 hit += 1
