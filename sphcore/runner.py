@@ -124,8 +124,9 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
 
     try:
         if not restart:
+            save_checkpoint()  # a restart point exists before any frame, whatever stops the run
+        if sim.step == 0:  # a fresh run, or a restart from that first checkpoint: frame 0
             sim.output()
-            save_checkpoint()  # a restart point exists from the first step on, whatever stops the run
         while not sim.done():
             sim.advance()
             sim.output()
@@ -142,7 +143,9 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
         status, message = "unstable", str(e)
     except OutputError as e:
         # no new checkpoint: the last one (periodic or at the start) matches the files on disk
-        status, message = "output_error", f"{e}; the last checkpoint and the files before it are kept (--restart)"
+        status, message = "output_error", (f"{e}; the last checkpoint and the files before it are kept (--restart)"
+                                           if (out / checkpoint.NAME).exists() else
+                                           f"{e}; no checkpoint could be written: run again with --overwrite")
     except Stopped as e:
         status, message = "stopped", f"{e}; checkpoint written, continue with --restart"
         stop["stopped_by"] = e.signum
