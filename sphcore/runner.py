@@ -166,17 +166,20 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
             "counters": dict(sim.counters),
             "segments": segments(status, wall),
         }
-        try:
-            for extra in pm.hook.sph_summary(sim=sim):
-                summary.update(extra or {})
-            pm.hook.sph_finish(sim=sim)
-            _write_json(out / "summary.json", summary)
-            manifest.update()
-        except OutputError as e:  # a full disk: the files written before are kept
-            if status in ("completed", "stopped"):
-                summary["status"], summary["message"] = "output_error", f"{e}; the last checkpoint is kept (--restart)"
-            elif status != "failed":
-                summary["message"] += f"; also {e}"
+        # each of these may meet a full disk (front.csv, summary.json): what was written
+        # before is kept, the writers are still closed, and the run reports the error
+        for write in (lambda: [summary.update(extra or {}) for extra in pm.hook.sph_summary(sim=sim)],
+                      lambda: pm.hook.sph_finish(sim=sim),
+                      lambda: _write_json(out / "summary.json", summary),
+                      manifest.update):
+            try:
+                write()
+            except OutputError as e:
+                if summary["status"] in ("completed", "stopped"):
+                    summary["status"] = "output_error"
+                    summary["message"] = f"{e}; the last checkpoint is kept (--restart)"
+                elif summary["status"] != "failed":
+                    summary["message"] += f"; also {e}"
     summary["_sim"] = sim
     summary["_signum"] = stop.get("stopped_by")
     return summary
@@ -184,11 +187,10 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
 
 def kernels_cached() -> bool:
     """Whether numba's cache holds the force kernel already (else the first step compiles)."""
-    import os
-
     from . import equations
 
-    cache_dir = os.environ.get("NUMBA_CACHE_DIR")
-    here = Path(equations.__file__).parent
-    places = [here / "__pycache__"] + ([Path(cache_dir)] if cache_dir else [])
-    return any(any(p.rglob("equations.sph_rates*.nbi")) for p in places if p.is_dir())
+    try:  # where numba itself keeps it (in-tree __pycache__, or the user-wide fallback)
+        places = [Path(equations.sph_rates._cache._cache_path)]
+    except AttributeError:  # another numba: look where it caches by default
+        places = [Path(equations.__file__).parent / "__pycache__"]
+    return any(any(p.glob("equations.sph_rates*.nbi")) for p in places if p.is_dir())
