@@ -180,6 +180,22 @@ def _remove_listed(out: Path, marker: dict) -> list[str]:
     return sorted(str(p.relative_to(out)) for p in out.rglob("*"))
 
 
+def _remove_stale_temporaries(out: Path, marker: dict | None) -> None:
+    """A SIGKILL in the middle of an atomic write leaves its temporary (``.NAME.tmp``, or
+    ``checkpoint.tmp.npz``): remove those of sph's own files, and only those."""
+    names = set((marker or {}).get("files", [])) | {"summary.json", "front.csv", MARKER, "checkpoint.npz"}
+    for rel in names:
+        p = _inside(out, rel) if isinstance(rel, str) else None
+        if p is None:
+            continue
+        for tmp in (p.with_name(f".{p.name}.tmp"), p.with_suffix(".tmp.npz") if p.suffix == ".npz" else None):
+            if tmp is not None and tmp.is_file() and not tmp.is_symlink():
+                try:
+                    tmp.unlink()
+                except OSError:
+                    pass  # harmless: the next write of that file replaces it
+
+
 def prepare(out: Path, case_file=None, overwrite=False, restart=False) -> Manifest:
     """Create (or reuse, on restart) the output directory; never clobber what is not sph's.
     Raises OutputError (exit status 2: nothing written)."""
@@ -189,19 +205,23 @@ def prepare(out: Path, case_file=None, overwrite=False, restart=False) -> Manife
                           f"(pass the link's target with --output)")
     if out.exists() and not out.is_dir():
         raise OutputError(f"output path {out} exists and is not a directory")
+    if restart and out.is_dir():
+        _remove_stale_temporaries(out, read_marker(out))
     if out.exists() and any(out.iterdir()) and not restart:
         if not overwrite:
             raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or --output DIR")
         marker = read_marker(out)
         if marker is None:
-            raise OutputError(f"refusing to overwrite {out}: it was not written by sph (no valid {MARKER} file)")
+            raise OutputError(f"refusing to overwrite {out}: it was not written by sph (no valid {MARKER} file "
+                              "listing sph's files; an empty one, from an older sph, lists none: delete it yourself)")
         if marker.get("dir") != _identity(out):
             raise OutputError(f"refusing to overwrite {out}: its {MARKER} was written for {marker.get('dir')!r} "
                               "(a copied marker proves nothing)")
         if case_file is not None and marker.get("case") not in ("", _identity(case_file)):
             raise OutputError(f"refusing to overwrite {out}: it holds the output of another case "
                               f"({marker.get('case')}); pass --output DIR")
-        _remove_listed(out, marker)
+        _remove_listed(out, marker)  # refuses (before deleting) when a listed path became a link
+        _remove_stale_temporaries(out, marker)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:

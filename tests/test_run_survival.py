@@ -456,6 +456,20 @@ def test_overwrite_keeps_user_files_and_never_follows_links(stopped_run, tmp_pat
     assert (out / "vtu").is_symlink()
 
 
+def test_restart_removes_temporaries_a_kill_left_and_nothing_else(stopped_run, capsys):
+    case_dir, out = stopped_run
+    frame = sorted((out / "vtu").iterdir())[-1]
+    left = [out / "checkpoint.tmp.npz", out / ".summary.json.tmp", frame.with_name(f".{frame.name}.tmp")]
+    for p in left:
+        p.write_bytes(b"half")
+    (out / ".notes.tmp").write_text("a user's")
+    status, _, err = cli_main(capsys, "run", case_dir, "--output", out, "--progress", "off", "--restart",
+                              "--t-end", "0.06")
+    assert status == 0, err
+    assert not any(p.exists() for p in left)
+    assert (out / ".notes.tmp").read_text() == "a user's"
+
+
 def test_symlinked_output_directory_is_refused(stopped_run, tmp_path, capsys):
     case_dir, out = stopped_run
     link = tmp_path / "link"
