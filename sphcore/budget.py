@@ -25,6 +25,10 @@ BYTES_PER_PARTICLE_PER_DIM = 250
 BASELINE_BYTES = 300 << 20
 
 
+#: largest gravity component accepted (m/s^2): 10^5 g, far beyond any case, far below overflow
+MAX_GRAVITY = 1e6
+
+
 def block_counts(case) -> list[float]:
     """Particles of each [[blocks]] entry (floats: a bad case may ask for 10^30)."""
     counts = []
@@ -58,6 +62,35 @@ def estimate(case) -> tuple[float, float]:
     return n, BASELINE_BYTES + n * BYTES_PER_PARTICLE_PER_DIM * case.dim
 
 
+def check_scales(case) -> None:
+    """Refuse values whose combination leaves the float range before a step is taken: the
+    Tait equation and its energy use rho0^gamma."""
+    g = case.config["physics"]["gravity"]
+    if not all(abs(x) <= MAX_GRAVITY for x in g):
+        raise CaseError(case.file, "physics.gravity", f"expected components of at most {MAX_GRAVITY:g} m/s^2 in size, "
+                        f"got {g}")
+    rho0, gamma = case.config["fluid"]["rho0"], case.config["eos"]["gamma"]
+    try:
+        r = rho0 ** gamma
+    except OverflowError:
+        r = math.inf
+    if not 0.0 < r < math.inf or not 0.0 < rho0 ** (gamma - 1.0) < math.inf:
+        raise CaseError(case.file, "fluid.rho0", f"rho0^gamma = {rho0:g}^{gamma:g} leaves the float range: expected "
+                        "a reference density nearer 1 (or a smaller eos.gamma)")
+
+
+def simulation(case, pm, output_dir=None, restarting=False):
+    """``Simulation(...)``, with arithmetic that fails while setting up from the case's
+    values (an overflow, a division by zero) reported as a CaseError, not a traceback."""
+    from .simulation import Simulation
+
+    try:
+        return Simulation(case, pm, output_dir, restarting=restarting)
+    except ArithmeticError as e:
+        raise CaseError(case.file, "-", f"setting up the particles failed on {type(e).__name__} ({e}): expected "
+                        "values of a physical size") from None
+
+
 def check_memory(case) -> None:
     """Refuse a case that needs more memory than the machine has (or particles.memory_limit_gib)."""
     n, need = estimate(case)
@@ -77,30 +110,65 @@ def check_memory(case) -> None:
                         "expected fewer particles (a larger dx or smaller blocks)")
 
 
+def _rates_at_start(sim) -> float:
+    """The first step's size (s) as the run chooses it: the rates at the initial state, then
+    ``choose_dt``. Everything the evaluation touches is put back afterwards (particle
+    arrays in place, work arrays, statistics, counters), so the run that follows takes
+    exactly the steps it would have taken without this look-ahead."""
+    import copy
+
+    import numpy as np
+
+    st = sim.state
+    saved_state = [(a, a.copy()) for _, a in st.arrays()]
+    saved_work = [(a, a.copy()) for a in (sim.acc, sim.acc_old, sim.drho, sim.drho_old, sim.p_dyn, sim.L, sim.shepard)
+                  if a is not None]
+    stats, counters, fresh = copy.deepcopy(sim.stats), sim.counters.copy(), sim.integrator.fresh
+    try:
+        sim.compute_rates()
+        if not np.all(np.isfinite(sim.acc)) or (sim.drho is not None and not np.all(np.isfinite(sim.drho))):
+            raise CaseError(sim.case.file, "-", "the forces at t = 0 are not finite: expected physics.gravity, eos, "
+                            "viscosity and density_diffusion values of a physical size")
+        return sim.choose_dt(), float(np.sqrt(np.max(np.einsum("ij,ij->i", sim.acc, sim.acc), initial=0.0)))
+    finally:
+        for a, copy_ in saved_state + saved_work:
+            a[...] = copy_
+        sim.stats.clear()
+        sim.stats.update(stats)
+        sim.counters.clear()
+        sim.counters.update(counters)
+        sim.integrator.fresh = fresh
+
+
+def _binding_limit(sim, amax: float) -> str:
+    """The case key behind the smallest adaptive limit (see :mod:`sphcore.timestep`)."""
+    tcfg = sim.case.config["time"]
+    vmax = float(max((math.sqrt(sum(v * v for v in row)) for row in sim.state.vel.tolist()), default=0.0))
+    limits = {"time.cfl": tcfg["cfl"] * sim.h / (sim.c0 + vmax) if sim.c0 + vmax > 0 else math.inf,
+              "time.force_factor": tcfg["force_factor"] * math.sqrt(sim.h / amax) if amax > 0 else math.inf,
+              "fluid.nu": tcfg["viscous_factor"] * sim.h ** 2 / sim.nu if sim.nu > 0 else math.inf}
+    return min(limits, key=limits.get)
+
+
 def check_first_step(sim) -> float:
-    """The first step's size (s), estimated as the run will choose it; a CaseError when none
-    limits it, when it is below the round-off of t_end, or when reaching t_end would take
-    more than time.max_steps steps."""
+    """The first step's size (s); a CaseError when nothing limits it, when the forces at the
+    start are not finite, when it is below the round-off of t_end, or when reaching t_end
+    would take more than time.max_steps steps.
+
+    A fresh run evaluates the rates at its initial state (as its first step will); a
+    restart has its rates from the checkpoint and is sized from them.
+    """
     case = sim.case
     tcfg = case.config["time"]
-    key = "time.dt"
-    if tcfg["dt"] is not None:
-        dt = tcfg["dt"]
+    if sim.done():  # a restart of a finished run: nothing to step
+        return 0.0
+    key = "time.dt" if tcfg["dt"] is not None else "time.dt_max" if tcfg["dt_max"] is not None else "time.cfl"
+    if sim.step == 0:
+        dt, amax = _rates_at_start(sim)
     else:
-        from .timestep import adaptive_dt, max_norms
-
-        # before any rates, gravity is the only acceleration known
-        vmax, _ = max_norms(sim.state.vel, sim.state.vel)
-        dt = adaptive_dt(sim.h, sim.c0, sim.nu, vmax, sim.g_abs, tcfg["cfl"], tcfg["force_factor"],
-                         tcfg["viscous_factor"])
-        if tcfg["dt_max"] is not None:
-            dt = min(dt, tcfg["dt_max"])
-            key = "time.dt_max"
-        else:
-            key = "time.cfl"
-    bounds = [b for b in sim.pm.hook.sph_max_dt(sim=sim) if b is not None]
-    if bounds:
-        dt = min(dt, min(bounds))
+        dt, amax = sim.choose_dt(), None
+    if tcfg["dt"] is None and tcfg["dt_max"] is None and amax is not None:
+        key = _binding_limit(sim, amax)
     if not math.isfinite(dt) or not dt > 0:
         raise CaseError(case.file, "time.dt", "required: no sound speed, velocity or force limits the step")
     t_end = sim.t_end

@@ -84,11 +84,10 @@ def main(argv=None) -> int:
             # the same validation as `sph run` (case, memory estimate, output path, first
             # step), so that whatever check accepts, run starts
             from . import budget
-            from .simulation import Simulation
 
             case, pm = runner.load(args.case_dir, args.overrides, args.t_end)
             out = runner.output_path(case, args.output)
-            sim = Simulation(case, pm)  # particles, sound speed and plugin set-up, no step
+            sim = budget.simulation(case, pm)  # particles, sound speed and plugin set-up, no step
             dt = budget.check_first_step(sim)
             print(f"{case.file}: ok: {case.dim}D, {sim.state.n} particles, {case.planes.count} wall planes, "
                   f"h = {sim.h:.4g} m, c0 = {sim.c0:.4g} m/s, first dt ~ {dt:.3g} s, "

@@ -28,7 +28,7 @@ CORE: dict[str, dict[str, O]] = {
                               "machine's available memory when unset", positive=True, nullable=True),
     },
     "fluid": {
-        "rho0": O(1000.0, "float", "kg/m^3", "reference density", positive=True),
+        "rho0": O(1000.0, "float", "kg/m^3", "reference density, up to 1e6", positive=True, extra={"max": 1e6}),
         "nu": O(0.0, "float", "m^2/s", "kinematic viscosity (laminar term, Morris 1997); 0 switches it off", min=0.0),
     },
     "physics": {
@@ -50,17 +50,20 @@ CORE: dict[str, dict[str, O]] = {
                        "(the support reaches the nearest neighbour) to 5", positive=True, min=0.5, extra={"max": 5.0}),
     },
     "eos": {
-        "c0": O(None, "float", "m/s", "reference sound speed; derived from c0_factor when unset", positive=True, nullable=True),
-        "c0_factor": O(10.0, "float", doc="c0 = c0_factor * sqrt(2 g H), H the fluid height (Monaghan 1994)", positive=True),
-        "gamma": O(7.0, "float", doc="Tait exponent", positive=True),
+        "c0": O(None, "float", "m/s", "reference sound speed, up to 1e6; derived from c0_factor when unset", positive=True,
+                nullable=True, extra={"max": 1e6}),
+        "c0_factor": O(10.0, "float", doc="c0 = c0_factor * sqrt(2 g H), H the fluid height (Monaghan 1994); up to 1e4",
+                       positive=True, extra={"max": 1e4}),
+        "gamma": O(7.0, "float", doc="Tait exponent, up to 100", positive=True, extra={"max": 100.0}),
         "p_background": O(0.0, "float", "Pa", "constant added to the Tait pressure", min=None),
     },
     "viscosity": {
-        "alpha": O(0.1, "float", doc="Monaghan artificial viscosity, linear term", min=0.0),
-        "beta": O(0.0, "float", doc="Monaghan artificial viscosity, quadratic term", min=0.0),
+        "alpha": O(0.1, "float", doc="Monaghan artificial viscosity, linear term, 0 to 10", min=0.0, extra={"max": 10.0}),
+        "beta": O(0.0, "float", doc="Monaghan artificial viscosity, quadratic term, 0 to 10", min=0.0, extra={"max": 10.0}),
     },
     "density_diffusion": {
-        "delta": O(0.0, "float", doc="Molteni & Colagrossi (2009) density diffusion coefficient; 0 is off", min=0.0),
+        "delta": O(0.0, "float", doc="Molteni & Colagrossi (2009) density diffusion coefficient, 0 to 1; 0 is off",
+                   min=0.0, extra={"max": 1.0}),
     },
     "integrator": {
         "scheme": O("leapfrog", "str", doc="time integration", choices=("leapfrog", "euler")),

@@ -17,7 +17,6 @@ from . import budget, checkpoint, outdir, pluginhost, resume
 from .case import apply_overrides, case_file, parse_override, read_toml, validate
 from .errors import CaseError, Instability, OutputError
 from .progress import Progress
-from .simulation import Simulation
 
 MARKER = outdir.MARKER  # only directories whose marker proves it are overwritten (see outdir)
 
@@ -50,6 +49,7 @@ def load(case_dir, overrides=(), t_end=None):
         raw = apply_overrides(raw, [(["time", "t_end"], t_end)])
     try:
         case = validate(raw, file, pluginhost.option_schemas())
+        budget.check_scales(case)
         budget.check_memory(case)  # particles and memory, before anything is allocated
     except CaseError as e:
         raise _blame_option(e, overrides, t_end) from None
@@ -89,7 +89,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
         resume.verify(saved, case, out, out / checkpoint.NAME)
     # particles and plugins are set up, and the first step sized, before anything touches
     # the disk: a case that fails there leaves the output directory as it was
-    sim = Simulation(case, pm, out, restarting=restart)
+    sim = budget.simulation(case, pm, out, restarting=restart)
     budget.check_first_step(sim)
     manifest = prepare_output(out, overwrite, restart, case.file)
     if mode != "off" and not kernels_cached():  # the first step compiles the force kernels

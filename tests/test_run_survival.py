@@ -162,6 +162,13 @@ SPECIAL = [
     ("output-dir-absolute", _edit(output={"dir": "/tmp/sph-absolute-output"}), []),
     ("output-dir-dot", _edit(output={"dir": "."}), []),
     ("domain-inverted", _edit(domain={"min": [1.0, 1.0], "max": [0.0, 0.0]}), []),
+    # values in range one by one whose physics leaves the float range: found before a step
+    ("gravity-1e300", _edit(physics={"gravity": [0.0, -1e300, 0.0]}), []),
+    ("nu-1e300", _edit(fluid={"nu": 1e300}), []),
+    ("rho0-1e-300", _edit(fluid={"rho0": 1e-300}), []),
+    ("rho0-gamma-overflow", _edit(fluid={"rho0": 1e6}, eos={"gamma": 100.0}), []),
+    ("p-background-1e300", _edit(eos={"p_background": 1e300}), []),
+    ("t-end-1e300", _edit(time={"t_end": 1e300}), []),
     ("set-not-a-number", GOOD_CASE.encode(), ["--set", "particles.dx=abc"]),
     ("set-no-section", GOOD_CASE.encode(), ["--set", "dx=0.1"]),
     ("set-deep", GOOD_CASE.encode(), ["--set", "time.t_end=" + "[" * 2000 + "]" * 2000]),
@@ -594,7 +601,7 @@ def test_ctrl_c_during_set_up_is_one_line_and_writes_nothing(tmp_path, capsys, m
     def interrupted(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("sphcore.runner.Simulation", interrupted)
+    monkeypatch.setattr("sphcore.simulation.Simulation", interrupted)
     before = snapshot(tmp_path)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "off")
     assert status == 128 + signal.SIGINT
