@@ -2,15 +2,19 @@
 (refused with the numbers when they exceed the machine), and the first time step (refused
 when it cannot advance the clock or would need an absurd number of steps).
 
-``sph check`` and ``sph run`` both call :func:`check_memory` (in ``runner.load``) and
-:func:`check_first_step` (after the particles are built, before the output directory is
-touched), so whatever ``check`` accepts, ``run`` starts.
+``sph check`` and ``sph run`` both call :func:`check_scales` and :func:`check_memory` (in
+``runner.load``), build the particles through :func:`simulation` and call
+:func:`check_first_step` (before the output directory is touched), so whatever ``check``
+accepts, ``run`` starts.
 """
 
 from __future__ import annotations
 
+import copy
 import math
 import os
+
+import numpy as np
 
 from .errors import CaseError
 
@@ -110,15 +114,11 @@ def check_memory(case) -> None:
                         "expected fewer particles (a larger dx or smaller blocks)")
 
 
-def _rates_at_start(sim) -> float:
-    """The first step's size (s) as the run chooses it: the rates at the initial state, then
-    ``choose_dt``. Everything the evaluation touches is put back afterwards (particle
+def _rates_at_start(sim) -> tuple[float, float]:
+    """(first step's size (s) as the run chooses it, largest |a| (m/s^2)): the rates at the
+    initial state, then ``choose_dt``. Everything the evaluation touches is put back afterwards (particle
     arrays in place, work arrays, statistics, counters), so the run that follows takes
     exactly the steps it would have taken without this look-ahead."""
-    import copy
-
-    import numpy as np
-
     st = sim.state
     saved_state = [(a, a.copy()) for _, a in st.arrays()]
     saved_work = [(a, a.copy()) for a in (sim.acc, sim.acc_old, sim.drho, sim.drho_old, sim.p_dyn, sim.L, sim.shepard)
