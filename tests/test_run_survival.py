@@ -463,6 +463,15 @@ def test_overwrite_keeps_user_files_and_never_follows_links(stopped_run, tmp_pat
     assert (out / "vtu").is_symlink()
 
 
+def test_overwrite_refuses_the_output_of_another_case(stopped_run, tmp_path, capsys):
+    _, out = stopped_run
+    other = write_case(tmp_path / "other", CASE)
+    before = snapshot(out)
+    status, _, err = cli_main(capsys, "run", other, "--output", out, "--overwrite", "--progress", "off")
+    assert status == 2 and "holds the output of another case" in err
+    assert snapshot(out) == before
+
+
 def test_restart_removes_temporaries_a_kill_left_and_nothing_else(stopped_run, capsys):
     case_dir, out = stopped_run
     frame = sorted((out / "vtu").iterdir())[-1]
