@@ -141,6 +141,8 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
         status, message = "completed", ""
     except Instability as e:
         status, message = "unstable", str(e)
+    except CaseError as e:  # found only while stepping (no limit on dt any more): exit 1, output kept
+        status, message = "unstable", f"at step {sim.step}, t = {sim.t:.6g} s: {e}"
     except OutputError as e:
         # no new checkpoint: the last one (periodic or at the start) matches the files on disk
         status, message = "output_error", (f"{e}; the last checkpoint and the files before it are kept (--restart)"

@@ -656,3 +656,23 @@ def test_checkpoint_clock():
     time.sleep(0.06)
     assert clock.due(1.0) and not clock.due(1.0)
     assert not any(CheckpointClock(0, None, 0.0).due(t) for t in (0.1, 1.0, 100.0))  # both off
+
+
+def test_eta_starts_after_the_first_step():
+    import io
+    import re
+    from types import SimpleNamespace
+
+    from sphcore.progress import Progress
+
+    stream = io.StringIO()
+    bar = Progress(t_end=1.0, n=10, mode="log", interval_s=0.0, stream=stream)
+    time.sleep(1.2)  # the first step compiles the kernels
+    sim = SimpleNamespace(step=1, t=0.1, dt=0.1)
+    bar.update(sim)  # no line: the clock starts now
+    assert stream.getvalue() == ""
+    time.sleep(0.05)
+    sim.step, sim.t = 5, 0.55  # half of what is left, in 0.05 s
+    bar.update(sim)
+    eta = float(re.search(r"ETA (\S+) s", stream.getvalue()).group(1))
+    assert eta == 0.0  # ~0.05 s to go; counting the 1.2 s of compiling would say >= 1 s
