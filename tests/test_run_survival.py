@@ -375,3 +375,17 @@ def test_checkpoint_clock():
     time.sleep(0.06)
     assert clock.due(1.0) and not clock.due(1.0)
     assert not any(CheckpointClock(0, None, 0.0).due(t) for t in (0.1, 1.0, 100.0))  # both off
+
+
+def test_restart_ignores_tables_of_plugins_the_run_does_not_use():
+    from types import SimpleNamespace
+
+    from sphcore import resume
+
+    cfg = {"time": {"t_end": 1.0}, "plugins": {"use": ["vtu"]}, "vtu": {"every_dt": 0.01}}
+    meta = {"version": sphcore.__version__, "config": resume.config_json({**cfg, "newly_installed": {"a": 1}})}
+    case = SimpleNamespace(config=cfg, file=Path("case.toml"))
+    resume.verify(meta, case, Path("out"), "checkpoint.npz")  # an unused plugin's table: no matter
+    changed = {**cfg, "vtu": {"every_dt": 0.02}}
+    with pytest.raises(sphcore.errors.CaseError, match="vtu.every_dt = 0.01 in the checkpoint, 0.02 now"):
+        resume.verify(meta, SimpleNamespace(config=changed, file=Path("case.toml")), Path("out"), "checkpoint.npz")
