@@ -16,7 +16,7 @@
   :func:`kernel_w`, :func:`kernel_f`, :data:`SUPPORT`, the kernel ids;
 - the equation of state: :mod:`sphcore.eos` as :data:`eos`;
 - output: :class:`ScheduledWriter` (base of a writer plugin: schedule, restart, write errors),
-  :class:`Schedule`.
+  :class:`Schedule`, :func:`write_atomically` (a file replaced whole or not at all).
 
 Hook specifications: :mod:`sphcore.hookspecs`. A plugin template: ``examples/plugin_template``.
 """
@@ -32,6 +32,7 @@ from .hookspecs import hookimpl
 from .kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
 from .neighbours import CellGrid, Grid, cell_of, cell_range
 from .options import Option, validate_table
+from .outdir import write_atomically
 from .params import Params
 from .particles import FLUID, GHOST, SPHERE, ParticleState, Sources
 from .schedule import Schedule, schedule_options
@@ -43,5 +44,5 @@ __all__ = [
     "Planes", "plane_distance", "particle_distance",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
     "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",
-    "eos", "ScheduledWriter", "Schedule", "schedule_options",
+    "eos", "ScheduledWriter", "Schedule", "schedule_options", "write_atomically",
 ]

@@ -66,22 +66,65 @@ class Case:
         return g
 
 
+#: a case file is a few kB; reading stops here (a link to /dev/zero must not fill memory)
+MAX_CASE_BYTES = 1 << 20
+#: tables nested deeper than this are refused (the parser recurses once per level)
+MAX_DEPTH = 32
+
+
+def _depth(value, level=0) -> int:
+    if level > MAX_DEPTH:
+        return level
+    if isinstance(value, dict):
+        return max([_depth(v, level + 1) for v in value.values()], default=level + 1)
+    if isinstance(value, list):
+        return max([_depth(v, level + 1) for v in value], default=level + 1)
+    return level
+
+
 def read_toml(path: Path) -> dict:
+    """The parsed case file. Bounded: only a regular file of at most MAX_CASE_BYTES, UTF-8,
+    nested at most MAX_DEPTH deep; anything else is a CaseError (exit status 2)."""
+    path = Path(path)
     try:
+        if path.exists() and not path.is_file():
+            what = "a directory" if path.is_dir() else "not a regular file (a device, a pipe)"
+            raise CaseError(path, "-", f"{what}: expected a TOML text file")
         with open(path, "rb") as f:
-            return tomllib.load(f)
+            data = f.read(MAX_CASE_BYTES + 1)
     except FileNotFoundError:
         raise CaseError(path, "-", "no such file (a case directory holds case.toml)") from None
-    except tomllib.TOMLDecodeError as e:
-        raise CaseError(path, "-", f"not valid TOML: {e}") from None
     except OSError as e:
         raise CaseError(path, "-", f"cannot read: {e.strerror}") from None
+    if len(data) > MAX_CASE_BYTES:
+        raise CaseError(path, "-", f"larger than {MAX_CASE_BYTES >> 10} KiB: expected a case file of a few kB")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise CaseError(path, "-", f"not UTF-8 text (byte {e.start}): expected a TOML text file") from None
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        # the parser's message ends with "(at line L, column C)": show that as the key
+        msg = str(e)
+        where = msg[msg.rfind("(at ") + 4:-1] if msg.endswith(")") and "(at " in msg else "syntax"
+        raise CaseError(path, where, f"not valid TOML: {msg}") from None
+    except RecursionError:
+        raise CaseError(path, "-", f"nested too deeply: expected at most {MAX_DEPTH} levels of tables") from None
+    if _depth(raw) > MAX_DEPTH:
+        raise CaseError(path, "-", f"nested too deeply: expected at most {MAX_DEPTH} levels of tables") from None
+    return raw
 
 
 def parse_override(text: str) -> tuple[list, object]:
     """``section.key=value`` (or ``blocks[0].count=...``) -> (path, value); see
     :mod:`sphcore.overrides`, the one grammar of ``--set`` and ``--vary``."""
-    path, value = parse_set(text)
+    try:
+        path, value = parse_set(text)
+    except RecursionError:
+        raise CaseError("--set", text.split("=", 1)[0], f"nested too deeply: expected at most {MAX_DEPTH} levels") from None
+    if _depth(value) > MAX_DEPTH:
+        raise CaseError("--set", ".".join(map(str, path)), f"nested too deeply: expected at most {MAX_DEPTH} levels")
     return list(path), value
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,9 @@ from .particles import ParticleState
 NAME = "checkpoint.npz"
 
 
-def save(sim, directory: Path) -> Path:
+def save(sim, directory: Path, extra: dict | None = None) -> Path:
+    """Write the checkpoint; ``extra`` (the run's identity and history, see
+    :mod:`sphcore.resume`) goes into its metadata."""
     path = Path(directory) / NAME
     tmp = path.with_suffix(".tmp.npz")
     ctx = sim.ctx
@@ -39,6 +42,7 @@ def save(sim, directory: Path) -> Path:
     meta = {"t": ctx.t, "step": ctx.step, "dt": ctx.dt, "stats": ctx._stats, "kept": kept,
             "counters": dict(ctx.counters), "fresh": bool(rates["fresh"]),
             "config": json.dumps(sim.case.config, default=str, sort_keys=True)}
+    meta.update(extra or {})
     try:
         with open(tmp, "wb") as f:
             np.savez(f, meta=np.array(json.dumps(meta, default=float)), **arrays)
@@ -46,6 +50,10 @@ def save(sim, directory: Path) -> Path:
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except OSError as e:
+        try:  # a full disk: drop the partial file, the previous checkpoint stays
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
         raise OutputError(f"cannot write checkpoint {path}: {e.strerror or e}") from e
     return path
 
@@ -59,6 +67,18 @@ def read(directory: Path) -> tuple[dict, dict]:
         meta = json.loads(str(z["meta"]))
         arrays = {k: z[k].copy() for k in z.files if k != "meta"}
     return meta, arrays
+
+
+def read_meta(directory: Path) -> dict:
+    """Only the metadata of ``directory``/checkpoint.npz (the arrays stay on disk)."""
+    path = Path(directory) / NAME
+    if not path.exists():
+        raise CaseError(path, "--restart", "no checkpoint to restart from in this output directory")
+    try:
+        with np.load(path) as z:
+            return json.loads(str(z["meta"]))
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
+        raise CaseError(path, "--restart", f"not a readable checkpoint ({e})") from None
 
 
 def restore_state(ctx, meta: dict, arrays: dict) -> None:

@@ -31,6 +31,8 @@ def _parser():
     c = sub.add_parser("check", help="validate a case without running it")
     c.add_argument("case_dir")
     c.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
+    c.add_argument("--t-end", type=float, help="as for run")
+    c.add_argument("--output", help="as for run: the output directory it would write")
     sub.add_parser("plugins", help="list installed plugins, the hooks they implement, and broken ones")
     o = sub.add_parser("options", help="every case key with its default, unit and meaning")
     o.add_argument("plugin", nargs="?", help="only this plugin's tables (or 'core')")
@@ -86,14 +88,20 @@ def main(argv=None) -> int:
         if args.command == "options":
             return _options(args.plugin)
         if args.command == "check":
-            case, pm = runner.load(args.case_dir, args.overrides)
-            from .simulation import Simulation
+            # the same validation as `sph run` (case, memory estimate, output path, first
+            # step), so that whatever check accepts, run starts
+            from . import budget
 
-            sim = Simulation(case, pm)  # particles, sound speed and plugin set-up, no step
-            prm = sim.params
+            case, pm = runner.load(args.case_dir, args.overrides, args.t_end)
+            out = runner.output_path(case, args.output)
+            sim = budget.simulation(case, pm)  # particles, sound speed and plugin set-up, no step
+            dt = budget.check_first_step(sim)
             print(f"{case.file}: ok: {case.dim}D, {sim.state.n} particles, {case.planes.count} wall planes, "
-                  f"h = {prm.h:.4g} m, c0 = {prm.c0:.4g} m/s, "
-                  f"plugins: {', '.join(case.config['plugins']['use']) or 'none'}")
+                  f"h = {sim.params.h:.4g} m, c0 = {sim.params.c0:.4g} m/s, first dt ~ {dt:.3g} s, "
+                  f"plugins: {', '.join(case.config['plugins']['use']) or 'none'}; output: {out.resolve()}")
+            if out.exists() and (not out.is_dir() or any(out.iterdir())):  # what run would say about it
+                print(f"{out.resolve()}: exists and is not empty: sph run needs --overwrite (sph's files only), "
+                      "--restart or --output DIR")
             return 0
         summary = runner.run(args.case_dir, args.output, args.overrides, args.t_end, args.overwrite,
                              args.restart, args.progress)
@@ -101,6 +109,8 @@ def main(argv=None) -> int:
         return _fail(str(e), 2)
     except (OutputError, pluginhost.PluginLoadError) as e:
         return _fail(str(e), 2)
+    except KeyboardInterrupt:  # Ctrl-C before the run's own handler is installed (set-up)
+        return _fail("interrupted during set-up; nothing written", 128 + signal.SIGINT)
     status = summary["status"]
     print(f"{summary['case']}: {status}: t = {summary['t']:.6g} s, {summary['steps']} steps, "
           f"{summary['n_particles']} particles, {summary['wall_time_s']:.2f} s wall, "

@@ -24,9 +24,11 @@ CORE: dict[str, dict[str, O]] = {
     "particles": {
         "dx": O(0.01, "float", "m", "initial particle spacing", positive=True),
         "radius": O(None, "float", "m", "particle radius for wall contact; dx/2 when unset", positive=True, nullable=True),
+        "memory_limit_gib": O(None, "float", "GiB", "refuse a case whose estimated memory exceeds this; the "
+                              "machine's available memory when unset", positive=True, nullable=True),
     },
     "fluid": {
-        "rho0": O(1000.0, "float", "kg/m^3", "reference density", positive=True),
+        "rho0": O(1000.0, "float", "kg/m^3", "reference density, up to 1e6", positive=True, extra={"max": 1e6}),
         "nu": O(0.0, "float", "m^2/s", "kinematic viscosity (laminar term, Morris 1997); 0 switches it off", min=0.0),
     },
     "physics": {
@@ -44,20 +46,24 @@ CORE: dict[str, dict[str, O]] = {
     },
     "kernel": {
         "name": O("wendland_c2", "str", doc="smoothing kernel", choices=("wendland_c2", "cubic_spline")),
-        "h_over_dx": O(1.3, "float", doc="smoothing length h in units of dx (support radius 2h)", positive=True),
+        "h_over_dx": O(1.3, "float", doc="smoothing length h in units of dx (support radius 2h); from 0.5 "
+                       "(the support reaches the nearest neighbour) to 5", positive=True, min=0.5, extra={"max": 5.0}),
     },
     "eos": {
-        "c0": O(None, "float", "m/s", "reference sound speed; derived from c0_factor when unset", positive=True, nullable=True),
-        "c0_factor": O(10.0, "float", doc="c0 = c0_factor * sqrt(2 g H), H the fluid height (Monaghan 1994)", positive=True),
-        "gamma": O(7.0, "float", doc="Tait exponent", positive=True),
+        "c0": O(None, "float", "m/s", "reference sound speed, up to 1e6; derived from c0_factor when unset", positive=True,
+                nullable=True, extra={"max": 1e6}),
+        "c0_factor": O(10.0, "float", doc="c0 = c0_factor * sqrt(2 g H), H the fluid height (Monaghan 1994); up to 1e4",
+                       positive=True, extra={"max": 1e4}),
+        "gamma": O(7.0, "float", doc="Tait exponent, up to 100", positive=True, extra={"max": 100.0}),
         "p_background": O(0.0, "float", "Pa", "constant added to the Tait pressure", min=None),
     },
     "viscosity": {
-        "alpha": O(0.1, "float", doc="Monaghan artificial viscosity, linear term", min=0.0),
-        "beta": O(0.0, "float", doc="Monaghan artificial viscosity, quadratic term", min=0.0),
+        "alpha": O(0.1, "float", doc="Monaghan artificial viscosity, linear term, 0 to 10", min=0.0, extra={"max": 10.0}),
+        "beta": O(0.0, "float", doc="Monaghan artificial viscosity, quadratic term, 0 to 10", min=0.0, extra={"max": 10.0}),
     },
     "density_diffusion": {
-        "delta": O(0.0, "float", doc="Molteni & Colagrossi (2009) density diffusion coefficient; 0 is off", min=0.0),
+        "delta": O(0.0, "float", doc="Molteni & Colagrossi (2009) density diffusion coefficient, 0 to 1; 0 is off",
+                   min=0.0, extra={"max": 1.0}),
         "hydrostatic": O(False, "bool", doc="diffuse only the departure from the hydrostatic density "
                          "stratification (Fourtakas et al. 2019), so that water at rest is not disturbed"),
     },
@@ -71,6 +77,8 @@ CORE: dict[str, dict[str, O]] = {
         "force_factor": O(0.25, "float", doc="dt <= force_factor * sqrt(h / |a|max)", positive=True),
         "viscous_factor": O(0.125, "float", doc="dt <= viscous_factor * h^2 / nu", positive=True),
         "dt_max": O(None, "float", "s", "upper bound on the adaptive step", positive=True, nullable=True),
+        "max_steps": O(100_000_000, "int", doc="refuse a case whose first step predicts more steps than this to "
+                       "reach t_end (a time step too small to finish)", positive=True),
     },
     "checks": {
         "rho_min": O(0.5, "float", doc="stop when a density falls below rho_min * rho0", positive=True),
@@ -88,9 +96,13 @@ CORE: dict[str, dict[str, O]] = {
         "use": O([], "str_list", doc="plugins to load, by entry-point name (e.g. reflective, ghost, vtu)"),
     },
     "output": {
-        "dir": O("output", "str", doc="output directory, relative to the case directory"),
+        "dir": O("output", "str", doc="output directory, a sub-directory of the case directory (elsewhere: sph run --output)"),
         "progress": O("auto", "str", doc="progress display", choices=("auto", "bar", "log", "off")),
         "log_interval_s": O(10.0, "float", "s", "wall time between progress lines when not on a terminal", positive=True),
+        "checkpoint_every_s": O(300.0, "float", "s", "wall time between periodic checkpoints (checkpoint.npz, "
+                                "replaced atomically); 0 is off", min=0.0),
+        "checkpoint_every_dt": O(None, "float", "s", "simulated time between periodic checkpoints, as well as "
+                                 "checkpoint_every_s; off when unset", positive=True, nullable=True),
     },
 }
 

@@ -8,6 +8,7 @@ the ``sph_options`` hook. Validation never executes anything from the case.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -71,9 +72,16 @@ def check_value(opt: Option, value: Any, file: str, key: str) -> Any:
             raise bad
         if k == "int" and not isinstance(value, int):
             raise bad
+        # integers beyond int64 would overflow numpy arrays; a float overflows on float()
+        if isinstance(value, int) and not -(2**63) < value < 2**63:
+            raise CaseError(file, key, f"expected {_expected(opt)} within the 64-bit range, got {value:.3g}")
         value = int(value) if k == "int" else float(value)
         if not math.isfinite(value):
             raise bad
+        # subnormal numbers (below 2.2e-308) lose precision and overflow when divided by
+        if value != 0 and abs(value) < sys.float_info.min:
+            raise CaseError(file, key, f"expected {_expected(opt)} of normal magnitude (0 or above "
+                            f"{sys.float_info.min:.3g} in size), got {value!r}")
         if opt.positive and not value > 0:
             raise CaseError(file, key, f"expected a positive number, got {value!r}")
         if opt.min is not None and value < opt.min:

@@ -31,8 +31,15 @@ class Progress:
 
     def update(self, sim):
         if self.steps0 is None:
-            self.steps0 = sim.step - 1
-            self.t0 = sim.t - sim.dt
+            # rates and the ETA count from the end of the first step: that step compiles the
+            # kernels on a first run (~10 s), which would otherwise inflate the first ETA
+            self.steps0, self.t0 = sim.step, sim.t
+            self.start = self.last_log = self.last_draw = time.perf_counter()
+            if self.bar is not None:  # tqdm's own clock and rate start here too
+                self.bar.reset(total=self.t_end)
+                self.bar.initial = self.bar.n = min(sim.t, self.t_end)
+                self.bar.refresh()
+            return
         if self.mode == "off":
             return
         now = time.perf_counter()
@@ -51,8 +58,9 @@ class Progress:
             frac = sim.t / self.t_end
             done = (sim.t - self.t0) / max(self.t_end - self.t0, 1e-300)  # of this process's share
             eta = (now - self.start) * (1 - done) / done if done > 0 else float("nan")
+            eta_text = f"{eta:.0f}" if eta < 1e7 else f"{eta:.2g}"  # never a 300-digit number
             print(f"[sph] t = {sim.t:.5g}/{self.t_end:.5g} s ({100 * frac:.1f}%), step {sim.step}, "
-                  f"dt = {sim.dt:.3g} s, {sps:.0f} steps/s, {psps:.3g} particle-steps/s, ETA {eta:.0f} s",
+                  f"dt = {sim.dt:.3g} s, {sps:.0f} steps/s, {psps:.3g} particle-steps/s, ETA {eta_text} s",
                   file=self.stream, flush=True)
 
     def close(self):

@@ -186,6 +186,9 @@ class Simulation:
             self.shepard_filter()
         self.integrator.rates()  # dt needs the current accelerations (force limit)
         ctx.dt = self.choose_dt()
+        if ctx.t + ctx.dt == ctx.t:  # a step below the round-off of t would hang the run
+            raise Instability(ctx.step, ctx.t, -1, f"time step {ctx.dt:.3g} s is below the round-off of t: "
+                              "time cannot advance")
         self.integrator.step(ctx.dt)
         ctx.t += ctx.dt
         ctx.step += 1

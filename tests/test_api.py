@@ -41,7 +41,7 @@ def test_public_module_exports_resolve():
 def test_builtin_plugins_import_only_the_public_module():
     for path in (ROOT / "plugins").rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("sphcore"):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "sphcore":
                 assert node.module == "sphcore.api", f"{path.relative_to(ROOT)} imports {node.module}"
 
 

@@ -85,11 +85,18 @@ def _params(rows):
     return [pytest.param(*row[1:], id=row[0]) for row in rows]
 
 
-def _assert_names_file_and_key(err: CaseError, case_dir: Path, key: str):
-    assert Path(err.file) == case_dir / "case.toml"
+def _source(case_dir: Path, key: str, overrides=()) -> str:
+    """Where the error must point: the --set option when it set the key, else case.toml."""
+    if any(key == o.split("=")[0] for o in overrides):
+        return "--set"
+    return str(case_dir / "case.toml")
+
+
+def _assert_names_file_and_key(err: CaseError, case_dir: Path, key: str, overrides=()):
+    assert err.file == _source(case_dir, key, overrides)
     assert err.key == key
     text = str(err)
-    assert str(case_dir / "case.toml") in text and key in text
+    assert f"{err.file}: {key}: " in text
     assert err.expected  # says what was expected
 
 
@@ -112,7 +119,7 @@ def test_malformed_case_is_a_case_error(tmp_path, text, overrides, key):
     case_dir = write_case(tmp_path / "case", text)
     with pytest.raises(CaseError) as info:
         make_sim(case_dir, overrides)
-    _assert_names_file_and_key(info.value, case_dir, key)
+    _assert_names_file_and_key(info.value, case_dir, key, overrides)
 
 
 @pytest.mark.parametrize("text, overrides, key",
@@ -123,7 +130,7 @@ def test_cli_run_rejects_malformed_case(tmp_path, capsys, text, overrides, key):
     sets = [a for o in overrides for a in ("--set", o)]
     status, out, err = _cli(capsys, "run", case_dir, *sets)
     assert status == 2
-    _assert_one_line_error(err, case_dir / "case.toml", key)
+    _assert_one_line_error(err, f"{_source(case_dir, key, overrides)}: {key}: ")
     assert not (case_dir / "output").exists()
     assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before, "something was written"
 
@@ -135,7 +142,7 @@ def test_cli_check_rejects_malformed_case(tmp_path, capsys, text, overrides, key
     sets = [a for o in overrides for a in ("--set", o)]
     status, out, err = _cli(capsys, "check", case_dir, *sets)
     assert status == 2
-    _assert_one_line_error(err, case_dir / "case.toml", key)
+    _assert_one_line_error(err, f"{_source(case_dir, key, overrides)}: {key}: ")
     assert "ok" not in out
     assert not (case_dir / "output").exists()
 
@@ -157,7 +164,7 @@ def test_case_file_that_is_a_directory(tmp_path, capsys):
     (case_dir / "case.toml").mkdir(parents=True)
     status, out, err = _cli(capsys, "run", case_dir)
     assert status == 2
-    _assert_one_line_error(err, case_dir / "case.toml", "cannot read")
+    _assert_one_line_error(err, case_dir / "case.toml", "a directory")
     assert not (case_dir / "output").exists()
 
 

@@ -139,7 +139,7 @@ def test_restart_is_bit_for_bit(tmp_path):
     assert full["status"] == rest["status"] == "completed"
     a, b = full["_sim"], rest["_sim"]
     assert a.step == b.step == 40 and a.t == b.t == t_end
-    assert rest["steps"] == 25
+    assert rest["steps"] == 40 and [s["steps"] for s in rest["segments"]] == [15, 25]  # the whole run
     sa, sb = by_id(a.state), by_id(b.state)
     for name in sa:
         assert np.array_equal(sa[name], sb[name]), name

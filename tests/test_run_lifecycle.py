@@ -236,7 +236,11 @@ def test_signal_stops_cleanly_and_restart_is_bit_for_bit(case_dir, reference, tm
     assert "Traceback" not in res.stderr
     restarted, ref = summary_of(out), summary_of(ref_out)
     assert restarted["status"] == "completed" and restarted["t"] == ref["t"] == T_END
-    assert meta["step"] + restarted["steps"] == ref["steps"]
+    # the summary covers the whole run: both segments, their steps adding up
+    assert restarted["steps"] == ref["steps"]
+    assert [seg["status"] for seg in restarted["segments"]] == ["stopped", "completed"]
+    assert [seg["steps"] for seg in restarted["segments"]] == [meta["step"], ref["steps"] - meta["step"]]
+    assert restarted["wall_time_s"] >= sum(seg["wall_time_s"] for seg in restarted["segments"]) * (1 - 1e-9)
 
     # Bit for bit, not approximately: the numba kernels are deterministic. Each particle's
     # sums are accumulated by one thread in a fixed neighbour order (the cell list's
@@ -332,10 +336,15 @@ def test_existing_output_is_refused_and_overwrite_replaces_only_sph_output(case_
     assert status == 2 and "blocks[0]" in err and "outside wall plane" in err
     assert snapshot(out) == before
 
-    # --overwrite replaces a directory written by sph: nothing of the old run remains
-    (out / "vtu" / "stale.vtu").write_text("old")
+    # --overwrite replaces what sph wrote: nothing of the old run remains, but a file the
+    # user added (not in the marker's manifest) is kept, even among the frames (issue 13)
+    (out / "vtu" / "mine.vtu").write_text("the user's")
+    old_frames = sorted(os.listdir(out / "vtu"))
     assert cli_run(capsys, *args[:-1], "0.01", "--overwrite")[0] == 0
-    assert not (out / "vtu" / "stale.vtu").exists()
+    assert (out / "vtu" / "mine.vtu").read_text() == "the user's"
+    new_frames = sorted(Path(rel).name for _, rel in read_pvd(out / "mini_dam.pvd"))
+    assert sorted(os.listdir(out / "vtu")) == sorted(new_frames + ["mine.vtu"])
+    assert len(old_frames) == 4 and len(new_frames) == 2  # the old run's third frame is gone
     assert summary_of(out)["t"] == 0.01
     assert len(netcdf_frames(out)["time"]) == 2  # t = 0 and 0.01 s, none of the old run's 3
     assert (out / ".sphcore-output").exists()

@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from sphcore.api import CaseError, Option, SUPPORT, hookimpl
+from sphcore.api import SUPPORT, CaseError, Option, hookimpl, write_atomically
 
 from sphcore_plugins.probes.sampling import depth_above, select_near
 
@@ -233,8 +233,9 @@ class FrontGauge:
             cols.append(np.array(self.heights)[:, 1])
             header += ",eta_back_wall_m"
         if ctx.output_dir is not None and ctx.output_dir.exists():
-            np.savetxt(ctx.output_dir / "front.csv", np.column_stack(cols), delimiter=",", header=header,
-                       comments="", fmt="%.8g")
+            # atomically: a full disk keeps the previous front.csv, no temporary left
+            write_atomically(ctx.output_dir / "front.csv", lambda tmp: np.savetxt(
+                tmp, np.column_stack(cols), delimiter=",", header=header, comments="", fmt="%.8g"))
         out = compare(t, x, self.a, self.x_wall - 2 * float(np.median(ctx.state.radius)), self.references)
         out["column_width_m"] = self.a
         out["front_reference"] = self.reference_note
