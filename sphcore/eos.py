@@ -39,10 +39,15 @@ def density(p, rho0, b, inv_gamma, p_background):
 
 
 @njit(cache=True, inline="always")
+def energy_potential(rho, rho0, b, gamma):
+    """B (rho^(gamma-1) / (rho0^gamma (gamma-1)) + 1/rho) (J/kg): u(rho) up to a constant."""
+    return b * (rho ** (gamma - 1.0) / (rho0 ** gamma * (gamma - 1.0)) + 1.0 / rho)
+
+
+@njit(cache=True, inline="always")
 def internal_energy(rho, rho0, b, gamma):
     """u(rho) - u(rho0) (J/kg), the work done compressing unit mass from rho0 to rho."""
-    u0 = b * (rho0 ** (gamma - 1.0) / (rho0 ** gamma * (gamma - 1.0)) + 1.0 / rho0)
-    return b * (rho ** (gamma - 1.0) / (rho0 ** gamma * (gamma - 1.0)) + 1.0 / rho) - u0
+    return energy_potential(rho, rho0, b, gamma) - energy_potential(rho0, rho0, b, gamma)
 
 
 @njit(cache=True)
