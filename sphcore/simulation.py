@@ -100,8 +100,12 @@ class Simulation:
         self.update_pressure()
         # energy can only fall unless a plugin does work on the particles (adds accelerations);
         # a plugin that adds them says whether they are conservative through sph_energy
-        self.check_energy = cfg["checks"]["energy_growth"] > 0 and (
-            not pm.hook.sph_accelerations.get_hookimpls() or bool(pm.hook.sph_energy.get_hookimpls()))
+        working = sorted({i.plugin_name for i in pm.hook.sph_accelerations.get_hookimpls()}
+                         - {i.plugin_name for i in pm.hook.sph_energy.get_hookimpls()})
+        self.check_energy = cfg["checks"]["energy_growth"] > 0 and not working
+        ctx.stats(CORE)["energy_check"] = (
+            "on" if self.check_energy else "off: checks.energy_growth = 0" if not working else
+            f"off: plugin(s) {', '.join(working)} add accelerations and report no energy (sph_energy)")
         self._energy_reference()
 
     # -- what plugins and the runner read ----------------------------------------------

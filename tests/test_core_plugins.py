@@ -215,6 +215,8 @@ def test_plugin_acceleration_moves_free_particles(throwaway, tmp_path):
     # sph_after_step fired once per step; the plugin's stats are in the summary under its name
     assert summary["throwaway"]["after_step"] == summary["steps"] == 50
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["throwaway"] == {"after_step": 50}
+    # its acceleration may do work: the energy check is off, and the summary says which plugin
+    assert summary["core"]["energy_check"].startswith("off") and "throwaway" in summary["core"]["energy_check"]
 
 
 def test_unselected_plugin_does_nothing(throwaway, tmp_path):
