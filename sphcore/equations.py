@@ -112,6 +112,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
         b1 = 0.0
         b2 = 0.0
         pi_r = p[i] / (rho[i] * rho[i])
+        near = walls and wall.share[i] > 0.0  # within the support of a wall: complete the sums
         for q in range(3 ** dim):
             k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
             for k in range(k0, k1):
@@ -137,7 +138,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
                 xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
                 mj = m[j]
                 dr += mj * (v0 * g0 + v1 * g1 + v2 * g2)
-                if walls:
+                if near:
                     vj = mj / rho[j]
                     d0 += vj * g0
                     d1 += vj * g1
@@ -163,7 +164,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
                     a0 += lam * v0
                     a1 += lam * v1
                     a2 += lam * v2
-        if walls and wall.share[i] > 0.0:
+        if near:
             a0, a1, a2, dr = _complete_at_wall(wall, i, dim, vel, rho[i], p[i], prm.rho_ref, gravity,
                                                a0, a1, a2, dr, d0, d1, d2, b0, b1, b2)
         gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
