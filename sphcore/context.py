@@ -22,7 +22,9 @@ Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
 ``ctx.force_pressure`` the pressure the momentum equation uses (Pa, (n,)): ``state.p``,
                       or with modified pressure its dynamic part. Plugins may change it in
                       ``sph_before_forces`` (e.g. a free surface held at zero).
-``ctx.acc``           (n, dim) accelerations of the current state (m/s^2); read only.
+``ctx.acc``           (n, dim) the integrator's last accelerations (m/s^2), read only: those
+                      of the current state between steps with the leapfrog, of the start of
+                      the step in ``sph_after_integrate`` and with Euler.
 ``ctx.counters``      collections.Counter of the core's kernel calls (for tests, summary).
 ``ctx.stats(plugin)`` the plugin's own dict of figures: merged into summary.json under
                       the plugin's name and kept across restarts (JSON numbers/strings).

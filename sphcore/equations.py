@@ -16,13 +16,13 @@ v_ij = v_i - v_j, grad_i W_ij = F_ij x_ij (see :mod:`sphcore.kernels`):
 - laminar viscosity (Morris et al. 1997, Lo & Shao 2002 form):
   + sum_j m_j 4 nu / (rho_i + rho_j) (x_ij . grad_i W_ij) / (|x_ij|^2 + eta^2) v_ij
 - boundary-integral walls (:class:`WallTerms`; Kulasegaram et al. 2004, Ferrand et al. 2013):
-  where a plugin supplies the wall share s_i of the kernel support, its gradient G_i and the
-  hydrostatic moment H_i, the sums are completed by the wall and renormalised by the fluid
-  share gamma_i = 1 - s_i:
-      drho_i/dt = (sum_j ... + rho_i v_i . G_i) / gamma_i
-      dv_i/dt   = g - (sum_j ... + 2 (p_i/rho_i) G_i + ((rho_i - rho_ref)/rho_i) H_i) / gamma_i
-  i.e. the wall carries the pressure p_i extrapolated hydrostatically to it (Ferrand's
-  p_s), which makes a fluid at rest hydrostatic in the continuum limit for any wall shape.
+  where a plugin supplies the wall share s_i of the kernel support, its gradient G_i, the
+  hydrostatic moment H_i = T_i g and the near walls' normals, the missing support is filled
+  with the mirror image of the fluid, its pressure extrapolated hydrostatically:
+      drho_i/dt = sum_j ... + 2 rho_i v_i . G_w
+      dv_i/dt   = g - sum_j ... - 2 (p_i/rho_i) G_w - ((rho_i - rho_ref)/rho_i) A_w g
+  with G_w and A_w g the discrete complements of the particle's own sums along the walls'
+  normals (continuum limits G and T g + s g); see :func:`_complete_at_wall`.
 - Tait equation of state: :mod:`sphcore.eos`.
 
 eta^2 = 0.01 h^2 keeps the denominators finite. Arguments are structured: ``src``

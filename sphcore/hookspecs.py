@@ -56,8 +56,9 @@ def sph_setup(ctx):
     """Prepare for the run with the initial particles in place.
 
     Fires once after the particles are built and before the first force computation.
-    May add particles (``ctx.state.append``), allocate work arrays, and check the initial
-    state against its own geometry (raise CaseError, e.g. a particle outside a wall).
+    May add particles (``ctx.state.append``; only when ``not ctx.restarting``: a checkpoint
+    already holds them), allocate work arrays, and check the initial state against its own
+    geometry (raise CaseError, e.g. a particle outside a wall).
     """
 
 
@@ -101,7 +102,7 @@ def sph_wall_terms(ctx, terms):
     the walls within each particle's support. Add (``+=``) what your walls contribute to the
     first three and widen the projector to your walls' normals, so that several wall
     plugins combine. The core then completes the continuity and momentum sums with them
-    and renormalises by the fluid share (see :mod:`sphcore.equations`).
+    (see :mod:`sphcore.equations`).
     """
 
 

@@ -88,13 +88,14 @@ class Simulation:
         saved = checkpoint.read(output_dir) if restarting else None
         if saved:  # constants above come from the case's initial particles, as in the first run
             checkpoint.restore_state(ctx, *saved)
-        pm.hook.sph_setup(ctx=ctx)
         self.pressure = PressureField(prm)
         ctx._pressure = self.pressure
         self.forces = Forces(ctx, pm.hook, self.pressure)
         self.integrator = SCHEMES[cfg["integrator"]["scheme"]](
             ctx.state, self.forces, self._after_drift, self.update_pressure, evolves_density=sph)
         ctx._rates = self.integrator
+        pm.hook.sph_setup(ctx=ctx)  # every ctx attribute is usable here
+        self.integrator.resize()  # a plugin may have added particles
         if saved:
             checkpoint.restore_rates(self, *saved)
         self.update_pressure()

@@ -59,7 +59,7 @@ def test_template_is_small_and_uses_only_the_public_module():
     source = MODULE.read_text()
     assert len(source.splitlines()) < 50
     imports = [n for n in ast.walk(ast.parse(source)) if isinstance(n, (ast.Import, ast.ImportFrom))]
-    sph = {n.module for n in imports if isinstance(n, ast.ImportFrom) and n.module.startswith("sphcore")}
+    sph = {n.module for n in imports if isinstance(n, ast.ImportFrom) and (n.module or "").startswith("sphcore")}
     assert sph == {"sphcore.api"}
 
 

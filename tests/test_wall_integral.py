@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sphcore.testing import context, run_case, write_case
+from sphcore.testing import run_case, write_case
 from sphcore import runner
 from sphcore.simulation import Simulation
 

@@ -172,9 +172,11 @@ class FrontGauge:
 
     @hookimpl
     def sph_setup(self, ctx):
-        if self.a is None:
-            x = ctx.state.pos[:, 0]
-            self.a = float(x.max() - x.min() + 2 * ctx.state.radius.max())
+        if self.a is None:  # measured on the initial particles, kept for a restart
+            if "column_width" not in ctx.kept(self):
+                x = ctx.state.pos[:, 0]
+                ctx.kept(self)["column_width"] = float(x.max() - x.min() + 2 * ctx.state.radius.max())
+            self.a = ctx.kept(self)["column_width"]
         # samples live in ctx.kept(self), which the checkpoint keeps: a restarted run continues
         # the series instead of starting a new one
         self.samples = ctx.kept(self).setdefault("samples", [])

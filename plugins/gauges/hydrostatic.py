@@ -40,11 +40,17 @@ class PressureGauge:
 
     @hookimpl
     def sph_setup(self, ctx):
-        st = ctx.state
-        order = np.argsort(st.id)
-        self.ids0, self.pos0 = st.id[order].copy(), st.pos[order].copy()
-        self.floor = float((self.pos0 @ ctx.params.up).min() - st.radius.max()) if ctx.params.g_abs > 0 else 0.0
-        self.H = float((self.pos0 @ ctx.params.up).max() + st.radius.max()) - self.floor
+        # the initial state is the reference: kept in the checkpoint, so a restarted run is
+        # still measured against the start of the run, not the restart point
+        kept = ctx.kept(self)
+        if "pos0" not in kept:
+            st = ctx.state
+            order = np.argsort(st.id)
+            pos0 = st.pos[order].copy()
+            floor = float((pos0 @ ctx.params.up).min() - st.radius.max()) if ctx.params.g_abs > 0 else 0.0
+            kept.update(ids0=st.id[order].copy(), pos0=pos0, floor=floor,
+                        H=float((pos0 @ ctx.params.up).max() + st.radius.max()) - floor)
+        self.ids0, self.pos0, self.floor, self.H = kept["ids0"], kept["pos0"], kept["floor"], kept["H"]
 
     @hookimpl
     def sph_summary(self, ctx):

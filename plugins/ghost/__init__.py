@@ -45,7 +45,6 @@ class GhostPlugin:
 
     def __init__(self):
         self.mirror: MirrorImages | None = None
-        self.ghosts_max = 0
 
     @hookimpl
     def sph_options(self):
@@ -88,11 +87,12 @@ class GhostPlugin:
         prm = ctx.params
         src = self.mirror.generate(st.pos, st.vel, st.rho, ctx.force_pressure, st.m, st.kind, prm.support,
                                    prm.gravity, prm.rho0, prm.c0, prm.gamma, prm.p_background, rho_ref=prm.rho_ref)
-        self.ghosts_max = max(self.ghosts_max, src.n)
+        stats = ctx.stats(self)  # in the summary and the checkpoint: cumulative across restarts
+        stats["ghosts_max"] = max(stats.get("ghosts_max", 0), src.n)
+        stats["ghosts_last"] = src.n
         return src
 
     @hookimpl
     def sph_summary(self, ctx):
         m = self.mirror
-        return {"ghosts_last": m.n if m else 0, "ghosts_max": self.ghosts_max,
-                "ghost_reallocations": m.reallocations if m else 0}
+        return {"ghost_reallocations": m.reallocations if m else 0}

@@ -38,6 +38,11 @@ def near_wall_projector(pos, normals, offsets, support, q):
     """q[i] (dim, dim) <- projector onto span(q[i], normals of the planes with d < support)."""
     n, dim = pos.shape
     for i in prange(n):
+        near = False
+        for k in range(normals.shape[0]):
+            near = near or particle_distance(normals, offsets, k, pos, i) < support
+        if not near:  # the bulk, far from every wall: q stays as it is
+            continue
         basis = np.zeros((3, 3))
         count = 0
         for a in range(dim):  # what another wall plugin put there: its columns span its walls
