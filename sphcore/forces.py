@@ -58,6 +58,7 @@ class Forces:
         self.wants_walls = bool(hook.sph_wall_terms.get_hookimpls())
         self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
         self._L = np.zeros((1, 3, 3))
+        self._grid = None
         self._shepard = np.zeros(1)
         self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), False)
 
@@ -77,9 +78,14 @@ class Forces:
         return Fields(*(np.concatenate([a] + [getattr(s, f) for s in extra]) for a, f in zip(fluid, Fields._fields)))
 
     def grid(self, pos, count=True) -> CellGrid:
+        """The cell grid of ``pos``, rebuilt in the arrays of the last one (no allocation)."""
         ctx = self.ctx
         try:
-            grid = CellGrid(pos, ctx.params.support)
+            if self._grid is None:
+                self._grid = CellGrid(pos, ctx.params.support)
+            else:
+                self._grid.rebuild(pos)
+            grid = self._grid
         except OverflowError as e:
             far = int(np.argmax(np.abs(pos - np.median(pos, axis=0)).sum(axis=1)))
             pid = int(ctx.state.id[far]) if far < ctx.state.n else -1

@@ -115,13 +115,16 @@ def _cell_ids(pos, lo, cell_size, ncell, out):
 
 
 @njit(cache=True)
-def _counting_sort(cell, ncells, order, cell_start):
+def _counting_sort(cell, ncells, order, cell_start, fill):
+    """order <- particle indices grouped by cell; cell_start (ncells + 1) CSR offsets; ``fill``
+    (>= ncells) is scratch."""
     cell_start[:] = 0
     for i in range(cell.shape[0]):
         cell_start[cell[i] + 1] += 1
     for c in range(ncells):
         cell_start[c + 1] += cell_start[c]
-    fill = cell_start[:-1].copy()
+    for c in range(ncells):
+        fill[c] = cell_start[c]
     for i in range(cell.shape[0]):  # stable: keeps the current order inside a cell
         c = cell[i]
         order[fill[c]] = i
@@ -136,23 +139,37 @@ def grid_shape(lo, hi, cell_size, dim):
 
 
 class CellGrid:
-    """A cell grid over a set of points, rebuilt for every force evaluation."""
+    """A cell grid over a set of points, rebuilt for every force evaluation.
+
+    :meth:`rebuild` reuses the arrays of the previous build (they grow when needed, by a
+    quarter more than asked), so a time step allocates none; ``order``, ``cell_start`` and
+    ``view`` are then views of them, valid until the next rebuild.
+    """
 
     def __init__(self, pos: np.ndarray, cell_size: float):
+        self.cell_size = float(cell_size)
+        self._cell = self._order = np.empty(0, np.int64)
+        self._start = self._fill = np.empty(0, np.int64)
+        self.rebuild(pos)
+
+    def rebuild(self, pos: np.ndarray) -> "CellGrid":
         n, dim = pos.shape
         lo, hi = bounding_box(pos)
-        self.lo, self.cell_size = lo, float(cell_size)
-        self.ncell = grid_shape(lo, hi, cell_size, dim)
+        self.lo = lo
+        self.ncell = grid_shape(lo, hi, self.cell_size, dim)
         ncells = int(np.prod(self.ncell))
         if ncells > 8 * n + 4096:
             # a few particles flew far from the rest: the grid would be mostly empty.
             raise OverflowError(f"cell grid of {ncells} cells for {n} particles")
-        self.cell = np.empty(n, np.int64)
+        if self._cell.shape[0] < n:
+            self._cell, self._order = np.empty(n + n // 4, np.int64), np.empty(n + n // 4, np.int64)
+        if self._start.shape[0] < ncells + 1:
+            self._start, self._fill = np.empty(ncells + ncells // 4 + 1, np.int64), np.empty(ncells + ncells // 4 + 1, np.int64)
+        self.cell, self.order, self.cell_start = self._cell[:n], self._order[:n], self._start[:ncells + 1]
         _cell_ids(pos, lo, self.cell_size, self.ncell, self.cell)
-        self.order = np.empty(n, np.int64)
-        self.cell_start = np.empty(ncells + 1, np.int64)
-        _counting_sort(self.cell, ncells, self.order, self.cell_start)
+        _counting_sort(self.cell, ncells, self.order, self.cell_start, self._fill)
         self.view = Grid(self.order, self.cell_start, self.lo, self.cell_size, self.ncell)
+        return self
 
 
 @njit(cache=True)
