@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import resume
 from .errors import CaseError, OutputError
 from .particles import ParticleState
 
@@ -41,7 +42,7 @@ def save(sim, directory: Path, extra: dict | None = None) -> Path:
                 kept[plugin][key] = value
     meta = {"t": ctx.t, "step": ctx.step, "dt": ctx.dt, "stats": ctx._stats, "kept": kept,
             "counters": dict(ctx.counters), "fresh": bool(rates["fresh"]),
-            "config": json.dumps(sim.case.config, default=str, sort_keys=True)}
+            "config": resume.config_json(sim.case.config)}
     meta.update(extra or {})
     try:
         with open(tmp, "wb") as f:

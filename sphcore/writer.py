@@ -34,7 +34,7 @@ class ScheduledWriter:
     def sph_setup(self, ctx):
         # the restart's files are trimmed to the checkpoint at the first output call, where
         # ctx.t and ctx.step are those of the restart point
-        self._restart_pending = bool(getattr(ctx, "restarting", False))
+        self._restart_pending = ctx.restarting
 
     @hookimpl
     def sph_output(self, ctx, final):

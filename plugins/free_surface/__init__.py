@@ -56,6 +56,3 @@ class FreeSurfacePlugin:
         self.count = int(surface.sum())
         ctx.stats(self)["free_surface_particles"] = self.count
 
-    @hookimpl
-    def sph_summary(self, ctx):
-        return {"free_surface_particles_last": self.count}

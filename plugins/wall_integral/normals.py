@@ -17,20 +17,25 @@ TOL = 1e-6  # a normal within this (squared) of the span already held adds no di
 
 @njit(cache=True, inline="always")
 def _add_direction(basis, count, dim, v0, v1, v2):
-    """Gram-Schmidt: add (v0, v1, v2) to the orthonormal rows basis[:count]; new count."""
+    """Gram-Schmidt: add (v0, v1, v2) to the orthonormal basis (a 9-tuple of three rows, the
+    first ``count`` in use); returns (basis, count). Tuples, so no allocation per particle."""
     for b in range(count):
-        c = v0 * basis[b, 0] + v1 * basis[b, 1] + v2 * basis[b, 2]
-        v0 -= c * basis[b, 0]
-        v1 -= c * basis[b, 1]
-        v2 -= c * basis[b, 2]
+        e0, e1, e2 = basis[3 * b], basis[3 * b + 1], basis[3 * b + 2]
+        c = v0 * e0 + v1 * e1 + v2 * e2
+        v0 -= c * e0
+        v1 -= c * e1
+        v2 -= c * e2
     nn = v0 * v0 + v1 * v1 + v2 * v2
     if nn <= TOL or count >= dim:
-        return count
+        return basis, count
     r = 1.0 / np.sqrt(nn)
-    basis[count, 0] = v0 * r
-    basis[count, 1] = v1 * r
-    basis[count, 2] = v2 * r
-    return count + 1
+    if count == 0:
+        basis = (v0 * r, v1 * r, v2 * r, basis[3], basis[4], basis[5], basis[6], basis[7], basis[8])
+    elif count == 1:
+        basis = (basis[0], basis[1], basis[2], v0 * r, v1 * r, v2 * r, basis[6], basis[7], basis[8])
+    else:
+        basis = (basis[0], basis[1], basis[2], basis[3], basis[4], basis[5], v0 * r, v1 * r, v2 * r)
+    return basis, count + 1
 
 
 @njit(cache=True, parallel=True)
@@ -43,17 +48,18 @@ def near_wall_projector(pos, normals, offsets, support, q):
             near = near or particle_distance(normals, offsets, k, pos, i) < support
         if not near:  # the bulk, far from every wall: q stays as it is
             continue
-        basis = np.zeros((3, 3))
+        basis = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         count = 0
         for a in range(dim):  # what another wall plugin put there: its columns span its walls
-            count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a], q[i, 2, a] if dim == 3 else 0.0)
+            basis, count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a],
+                                          q[i, 2, a] if dim == 3 else 0.0)
         for k in range(normals.shape[0]):
             if particle_distance(normals, offsets, k, pos, i) < support:
-                count = _add_direction(basis, count, dim, normals[k, 0], normals[k, 1],
-                                       normals[k, 2] if dim == 3 else 0.0)
+                basis, count = _add_direction(basis, count, dim, normals[k, 0], normals[k, 1],
+                                              normals[k, 2] if dim == 3 else 0.0)
         for a in range(dim):
             for b in range(dim):
                 s = 0.0
                 for c in range(count):
-                    s += basis[c, a] * basis[c, b]
+                    s += basis[3 * c + a] * basis[3 * c + b]
                 q[i, a, b] = s
