@@ -47,9 +47,12 @@ class PressureGauge:
             st = ctx.state
             order = np.argsort(st.id)
             pos0 = st.pos[order].copy()
-            floor = float((pos0 @ ctx.params.up).min() - st.radius.max()) if ctx.params.g_abs > 0 else 0.0
+            # blocks are filled dx/2 from their faces: floor and free surface lie half a
+            # spacing beyond the outermost centres (the contact radius may differ)
+            half = 0.5 * ctx.params.dx
+            floor = float((pos0 @ ctx.params.up).min() - half) if ctx.params.g_abs > 0 else 0.0
             kept.update(ids0=st.id[order].copy(), pos0=pos0, floor=floor,
-                        H=float((pos0 @ ctx.params.up).max() + st.radius.max()) - floor)
+                        H=float((pos0 @ ctx.params.up).max() + half) - floor)
         self.ids0, self.pos0, self.floor, self.H = kept["ids0"], kept["pos0"], kept["floor"], kept["H"]
 
     @hookimpl
@@ -60,7 +63,7 @@ class PressureGauge:
         if not np.array_equal(st.id[order], self.ids0):
             return {"particles_lost": int(self.ids0.size - st.n)}
         z = pos @ ctx.params.up - self.floor
-        dx = 2.0 * float(np.median(st.radius))
+        dx = ctx.params.dx  # layers one initial spacing thick (not the contact radius, which a case may set)
         rows = layer_errors(z, p, dx, self.H, ctx.params.rho0, ctx.params.g_abs)
         below = rows[:, 0] < self.H - self.skip * dx
         return {
