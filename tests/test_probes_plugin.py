@@ -282,3 +282,32 @@ def test_pressure_cases_put_their_sensors_on_the_downstream_wall_at_the_publishe
     block = case_.config["blocks"][0]
     assert block["max"][1] - block["min"][1] == pytest.approx(p.height)
     assert case_.config["time"]["t_end"] * math.sqrt(9.81 / p.height) >= 6.5
+
+
+def _peer_script():
+    spec = importlib.util.spec_from_file_location("pp_peer", ROOT / "postprocessing" / "peer_series.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_peer_series_scores_the_experiment_itself_as_exact(tmp_path, capsys):
+    """Buchner's P1 points, written as a peer's series in s and Pa (CSV and JSON), score
+    MAE 0 and a first rise equal to the experiment's; a bad key or file exits 2."""
+    from sphcore_plugins.gauges import reference
+
+    exp = reference.series("buchner_2002_P1")
+    H, rho, g = 0.6, 1000.0, 9.81
+    t, p = exp[:, 0] / np.sqrt(g / H), exp[:, 1] * rho * g * H
+    csv = tmp_path / "peer.csv"
+    csv.write_text("time_s,p_pa\n" + "\n".join(f"{float(a)!r},{float(b)!r}" for a, b in zip(t, p)))
+    js = tmp_path / "peer.json"
+    js.write_text(json.dumps({"P1": {"time": t.tolist(), "values": p.tolist()}}))
+    peer = _peer_script()
+    for args in ([str(csv)], [str(js), "--key", "P1"]):
+        assert peer.main(args + ["--reference", "buchner_2002_P1", "--H", "0.6"]) == 0
+        out = dict(line.split(" = ") for line in capsys.readouterr().out.splitlines())
+        assert float(out["mae_rhogH"]) < 1e-9
+        assert abs(float(out["rise_dtau"])) < 1e-9
+    assert peer.main([str(js), "--key", "nope", "--reference", "buchner_2002_P1", "--H", "0.6"]) == 2
+    assert peer.main([str(tmp_path / "none.csv"), "--reference", "buchner_2002_P1", "--H", "0.6"]) == 2
