@@ -21,8 +21,9 @@ v_ij = v_i - v_j, grad_i W_ij = F_ij x_ij (see :mod:`sphcore.kernels`):
   with the mirror image of the fluid, its pressure extrapolated hydrostatically:
       drho_i/dt = sum_j ... + 2 rho_i v_i . G_w
       dv_i/dt   = g - sum_j ... - 2 (p_i/rho_i) G_w - ((rho_i - rho_ref)/rho_i) A_w g
-  with G_w and A_w g the discrete complements of the particle's own sums along the walls'
-  normals (continuum limits G and T g + s g); see :func:`_complete_at_wall`.
+  with G_w the wall gradient the plugin supplies (the exact G corrected for the lattice
+  error of the truncated sum) and A_w g the discrete complement of the particle's own first
+  moment along the walls' normals, lambda (T g + s g) along them; see :func:`_complete_at_wall`.
 - Tait equation of state: :mod:`sphcore.eos`.
 
 eta^2 = 0.01 h^2 keeps the denominators finite. Arguments are structured: ``src``
@@ -105,10 +106,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
         a1 = 0.0
         a2 = 0.0
         dr = 0.0
-        d0 = 0.0  # D = sum_j V_j grad_i W_ij and
-        d1 = 0.0  # b = sum_j V_j grad_i W_ij (x_j - x_i) . g, for the wall completion
-        d2 = 0.0
-        b0 = 0.0
+        b0 = 0.0  # b = sum_j V_j grad_i W_ij (x_j - x_i) . g, for the wall completion
         b1 = 0.0
         b2 = 0.0
         pi_r = p[i] / (rho[i] * rho[i])
@@ -139,11 +137,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
                 mj = m[j]
                 dr += mj * (v0 * g0 + v1 * g1 + v2 * g2)
                 if near:
-                    vj = mj / rho[j]
-                    d0 += vj * g0
-                    d1 += vj * g1
-                    d2 += vj * g2
-                    vr = -vj * (x0 * gravity[0] + x1 * gravity[1] + x2 * gravity[2])
+                    vr = -mj / rho[j] * (x0 * gravity[0] + x1 * gravity[1] + x2 * gravity[2])
                     b0 += vr * g0
                     b1 += vr * g1
                     b2 += vr * g2
@@ -165,8 +159,8 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
                     a1 += lam * v1
                     a2 += lam * v2
         if near:
-            a0, a1, a2, dr = _complete_at_wall(wall, i, dim, vel, rho[i], p[i], prm.rho_ref, gravity,
-                                               a0, a1, a2, dr, d0, d1, d2, b0, b1, b2)
+            a0, a1, a2, dr = _complete_at_wall(wall, i, dim, vel, rho[i], p[i], prm.rho_ref, prm.moment_norm, gravity,
+                                               a0, a1, a2, dr, b0, b1, b2)
         gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
         acc[i, 0] = gscale * gravity[0] + a0
         acc[i, 1] = gscale * gravity[1] + a1
@@ -176,7 +170,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
 
 
 @njit(cache=True, inline="always")
-def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, gravity, a0, a1, a2, dr, d0, d1, d2, b0, b1, b2):
+def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2):
     """Add the wall's boundary integrals to particle i's sums (module docstring).
 
     The wall stands for the missing part of the support, filled with the mirror image of
@@ -186,42 +180,31 @@ def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, gravity, a0, a1, a
     makes the wall do no net work (the power of the wall force equals minus the rate of
     the Tait internal energy it stores), like mirror ghosts, with no ghost particle.
 
-    G_w = -Q D, D = sum_j V_j grad_i W_ij the particle's own truncated neighbour sum and Q
-    the projector onto the near walls' normals: the wall's part of the discrete complement
-    -D, whose continuum limit is the exact G (the rest of -D is missing support at a free
-    surface, which carries no pressure). With the exact G the lattice error |D + G|
-    (0.5-1 /m at h = 1.3 dx, measured) times 2 p_i/rho_i ~ 2 g H would be a spurious force
-    as large as gravity at the floor of a 1 m tank; with G_w a uniform pressure exerts no
-    force at all. G_w is dropped where it points away from the wall (G_w . G < 0: the
-    particle's missing support faces away from the wall) and capped at 2 |G|.
+    G_w is ``wall.grad`` as the plugins supply it: a function of the particle's position
+    alone, so that the wall pushes harder the closer a particle comes (the wall's
+    stiffness). The ``wall_integral`` plugin gives the exact G minus the lattice error of
+    the truncated sum on the initial lattice (:mod:`sphcore_plugins.wall_integral.lattice`),
+    which makes a uniform pressure exert no force on that lattice, corners included.
+    (The discrete complement -Q D of the particle's own sum, used before, balances any
+    arrangement but does not depend on the wall distance at all: particles then rested on
+    the reflective contact, not on the wall pressure.)
     """
-    g0 = wall.grad[i, 0]
-    g1 = wall.grad[i, 1]
-    g2 = wall.grad[i, 2] if dim == 3 else 0.0
-    gg = g0 * g0 + g1 * g1 + g2 * g2
-    if gg == 0.0:
-        return a0, a1, a2, dr
+    w0 = wall.grad[i, 0]
+    w1 = wall.grad[i, 1]
+    w2 = wall.grad[i, 2] if dim == 3 else 0.0
     q = wall.normals
-    w0, w1, w2 = _project(q, i, dim, -d0, -d1, -d2)
-    wg = w0 * g0 + w1 * g1 + w2 * g2
-    if wg <= 0.0:
-        w0 = w1 = w2 = 0.0
-    else:
-        ww = w0 * w0 + w1 * w1 + w2 * w2
-        if ww > 4.0 * gg:
-            c = 2.0 * np.sqrt(gg / ww)
-            w0 *= c
-            w1 *= c
-            w2 *= c
-    # first moment: along the wall normals the discrete complement (I - B) g of the
+    # first moment: along the wall normals the discrete complement (lam I - B) g of the
     # particle's own sum b = B g, so that the hydrostatic pressure of the particles is in
     # balance there whatever their arrangement; along the walls (a side wall's vertical,
-    # where the particle's missing support may be free surface) the exact A_w g = T g + s g
+    # where the particle's missing support may be free surface) lam times the exact
+    # A_w g = T g + s g. lam (Params.moment_norm) is what the interior's discrete sum gives
+    # on the initial lattice (B = lam I): a particle next to a wall is then held up as an
+    # interior one is (lam rho g), and no column along a wall slides against its neighbours
     s = wall.share[i]
-    en0, en1, en2 = _project(q, i, dim, gravity[0] - b0, gravity[1] - b1, gravity[2] - b2)
-    t0 = wall.hydro[i, 0] + s * gravity[0]
-    t1 = wall.hydro[i, 1] + s * gravity[1]
-    t2 = (wall.hydro[i, 2] + s * gravity[2]) if dim == 3 else 0.0
+    en0, en1, en2 = _project(q, i, dim, lam * gravity[0] - b0, lam * gravity[1] - b1, lam * gravity[2] - b2)
+    t0 = lam * (wall.hydro[i, 0] + s * gravity[0])
+    t1 = lam * (wall.hydro[i, 1] + s * gravity[1])
+    t2 = lam * (wall.hydro[i, 2] + s * gravity[2]) if dim == 3 else 0.0
     tn0, tn1, tn2 = _project(q, i, dim, t0, t1, t2)
     h0 = en0 + t0 - tn0
     h1 = en1 + t1 - tn1

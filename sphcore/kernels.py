@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 CUBIC_SPLINE = 0
@@ -56,3 +57,23 @@ def kernel_f(kernel_id, r, h, dim):
     if q < 2.0:
         return -5.0 * s * (1.0 - 0.5 * q) ** 3
     return 0.0
+
+
+def lattice_moment(kernel_id: int, h: float, dx: float, dim: int) -> float:
+    """Lattice normalisation lambda of the SPH first moment: -(1/dim) sum_k dx^dim x_k . grad W(x_k).
+
+    The sum runs over the nodes x_k != 0 of the square (cubic) lattice of spacing dx, the
+    arrangement particles start in. In the continuum the integral int x (x) grad W dV is
+    -I; on the lattice the SPH sum sum_j V_j (x_j - x_i) (x) grad_i W_ij is lambda I (cubic
+    symmetry), e.g. 0.974 for Wendland C2 at h = 1.3 dx in 2D and 0.999 at h = 2 dx. An
+    interior particle in a hydrostatic field is held up by lambda rho g, so a wall that
+    completes the missing support should supply lambda of the continuum moment too
+    (:func:`sphcore.equations._complete_at_wall`).
+    """
+    n = int(math.ceil(SUPPORT * h / dx))
+    k = np.arange(-n, n + 1, dtype=np.float64) * dx
+    x = np.stack(np.meshgrid(*([k] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
+    r = np.sqrt((x * x).sum(axis=1))
+    r = r[r > 0.0]
+    f = np.array([kernel_f(kernel_id, ri, h, dim) for ri in r])
+    return float(-(f * r * r).sum() * dx ** dim / dim)

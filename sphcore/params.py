@@ -14,7 +14,7 @@ import numpy as np
 
 from .errors import CaseError
 from .eos import tait_b
-from .kernels import KERNEL_IDS, SUPPORT
+from .kernels import KERNEL_IDS, SUPPORT, lattice_moment
 from .particles import FLUID
 
 
@@ -45,6 +45,7 @@ class Params(NamedTuple):
     rho_ref: float  # rho0 with modified pressure (buoyancy g (1 - rho0/rho)), else 0
     surface_level: float  # height of the highest block top along `up` (m): the hydrostatic reference
     kernel_gradient: bool  # Bonet & Lok corrected kernel gradient
+    moment_norm: float  # lattice normalisation of the SPH first moment (sphcore.kernels.lattice_moment)
 
 
 def reference_sound_speed(case, state) -> float:
@@ -85,4 +86,5 @@ def derive(case, state, surface_level: float = 0.0) -> Params:
         eta2=0.01 * h * h, gravity=gravity, g_abs=g_abs, up=np.ascontiguousarray(up),
         modified_pressure=modified, rho_ref=rho0 if modified else 0.0, surface_level=float(surface_level),
         kernel_gradient=sph and cfg["corrections"]["kernel_gradient"],
+        moment_norm=lattice_moment(KERNEL_IDS[cfg["kernel"]["name"]], h, case.dx, case.dim),
     )

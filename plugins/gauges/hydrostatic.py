@@ -1,7 +1,8 @@
 """The ``pressure_gauge`` plugin: how well a tank of water stays at rest.
 
 At the end of a run it reports, against the initial state: the largest particle
-displacement (m), the free-surface drift (m, highest particle), and the pressure profile
+displacement (m), over all particles and over those that started below the top
+``skip_layers`` layers, the free-surface drift (m, highest particle), and the pressure profile
 error: the pressure averaged over each horizontal particle layer against rho0 g (H - y),
 H the initial free-surface level, largest relative error over the layers below the top
 two (the validation criterion of the seed paper's hydrostatic case).
@@ -66,9 +67,12 @@ class PressureGauge:
         dx = ctx.params.dx  # layers one initial spacing thick (not the contact radius, which a case may set)
         rows = layer_errors(z, p, dx, self.H, ctx.params.rho0, ctx.params.g_abs)
         below = rows[:, 0] < self.H - self.skip * dx
+        moved = np.linalg.norm(pos - self.pos0, axis=1)
+        deep = (self.pos0 @ ctx.params.up - self.floor) < self.H - self.skip * dx  # started below the top layers
         return {
             "particles_lost": 0,
-            "max_displacement_m": float(np.linalg.norm(pos - self.pos0, axis=1).max()),
+            "max_displacement_m": float(moved.max()),
+            "max_displacement_below_top_m": float(moved[deep].max()) if deep.any() else float("nan"),
             "surface_drift_m": float(z.max() + dx / 2 - self.H),
             "pressure_max_layer_err": float(np.nanmax(np.abs(rows[below, 3]))) if below.any() else float("nan"),
         }

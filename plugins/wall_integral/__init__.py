@@ -15,12 +15,17 @@ the hydrostatic moment T g, and the projector onto the near walls' normals
 
 the missing support filled with the mirror image of the fluid, its pressure extrapolated
 hydrostatically (the boundary-integral walls of Kulasegaram et al. 2004 and Ferrand et al.
-2013, in the mirror form that makes the wall do no net work). G_w is the wall's part of the
-discrete complement of the particle's own sum, whose continuum limit is G; A_w g is the
-discrete complement along the walls' normals and T g + s g along the walls. Why this
-formulation: it needs no wall particles (the paper's walls stay planes), it is exact for the
-geometry, and a uniform pressure exerts no force on any particle. Its measured state
-(hydrostatic tank, wall-pressure experiments) is in docs/wall_pressure.md.
+2013, in the mirror form that makes the wall do no net work). The wall gradient G_w is the
+exact G minus the lattice error of the truncated sum on the initial lattice, tabulated once
+per run for one, two and three perpendicular walls (``lattice.py``): a function of position,
+so the wall pushes harder the closer a particle comes, and a uniform pressure exerts no
+force on the initial lattice, corners included. A_w g is the discrete complement of the
+particle's own first moment along the walls' normals and lambda (T g + s g) - F g along
+them (lambda the interior's lattice normalisation, F the side wall's lattice error), so
+that a column along a side wall is held up as the interior is. Why this formulation: it
+needs no wall particles (the paper's walls stay planes), it is exact for the geometry, and
+it is consistent with the interior on the lattice the blocks are filled with. Its measured
+state (hydrostatic tank, wall-pressure experiments) is in docs/wall_pressure.md.
 
 Use it beside ``reflective``, which keeps every particle inside:
 ``[plugins] use = ["reflective", "wall_integral", ...]``. No options.
@@ -35,6 +40,7 @@ import numpy as np
 
 from sphcore.api import CaseError, hookimpl
 
+from .lattice import lattice_error_tables, subtract_lattice_error
 from .normals import near_wall_projector
 from .share import wall_terms
 
@@ -45,6 +51,7 @@ class WallIntegralPlugin:
         self.share = np.zeros(0)
         self.grad = np.zeros((0, 2))
         self.hydro = np.zeros((0, 2))
+        self._table = None
 
     @hookimpl
     def sph_configure(self, case):
@@ -64,6 +71,11 @@ class WallIntegralPlugin:
             self.share, self.grad, self.hydro = np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim))
         wall_terms(st.pos, self.normals, self.offsets, prm.kernel_id, prm.h, prm.gravity, self.share, self.grad,
                    self.hydro)
+        if self._table is None:
+            self._table = lattice_error_tables(prm.kernel_id, prm.h, prm.dx, dim, prm.moment_norm)
+        vol = st.m / (st.rho * prm.dx ** dim)  # each particle's volume in lattice volumes
+        subtract_lattice_error(st.pos, vol, self.normals, self.offsets, *self._table, prm.support,
+                               prm.moment_norm, prm.gravity, self.grad, self.hydro)
         np.add(terms.share, self.share, out=terms.share)  # several wall plugins add up
         np.add(terms.grad, self.grad, out=terms.grad)
         np.add(terms.hydro, self.hydro, out=terms.hydro)

@@ -1,0 +1,185 @@
+"""Lattice error of the truncated SPH sums next to walls, tabulated once per run.
+
+A particle of the square (cubic) lattice the blocks are filled with, at distances
+d_a = (k_a + 1/2) dx from m mutually perpendicular walls (m = 1 a plane, 2 an edge or a 2D
+corner, 3 a 3D corner), has the truncated neighbour sum D = sum_j V_j grad_i W_ij over the
+lattice nodes inside; the continuum says D = -G, G the gradient of the walls' share of its
+support. The difference E = D + G is the lattice error of the sum: on the initial lattice a
+uniform pressure would push the particle by 2 (p/rho) E. The wall model uses G - E as the
+wall gradient: it keeps the exact G's growth as a particle approaches a wall (the wall's
+stiffness, which the discrete complement -D alone lacks: it does not depend on the wall
+distance at all, and particles then rest on the reflective contact instead of the wall
+pressure) while a uniform pressure exerts no force on the initial lattice, corners included.
+
+The same holds for the first moment along the walls (a side wall's vertical): the node's
+own sum b_t = -sum_j V_j F_ij (x_ij . t)^2 plus lambda times the exact outside moment
+A_t = (T + s) t . t differs from the interior's lambda (Params.moment_norm) by F; the
+plugin removes it from the hydrostatic moment, so that a column along a side wall is held
+up as the interior is and does not slide.
+
+Tables: nodes (k + 1/2) dx for (k + 1/2) dx < 2h and a last node at 2h (where the wall's
+influence ends); multilinear in between, the first node's value closer to a wall than the
+first row. Planes that are not mutually perpendicular (a V tank's apex) add their
+single-plane errors.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from sphcore.api import kernel_f
+
+from .share import wall_terms_at
+
+PERP_TOL = 1e-9  # |n_a . n_b| below this: perpendicular planes
+
+
+def _node_error(kernel_id, h, dx, dim, lam, d):
+    """(E_1..E_m, D_1..D_m, F, B) of a lattice node at distances d (m,) from m perpendicular
+    walls x_a = 0 (a < m), the fluid at x_a > 0: E = D + G and F = B + lam A_t - lam, with
+    D the truncated sum and B its first moment along the walls (lattice volumes dx^dim)."""
+    m = len(d)
+    support = 2.0 * h
+    n = int(math.ceil(support / dx))
+    k = np.arange(-n, n + 1, dtype=np.float64) * dx
+    off = np.stack(np.meshgrid(*([k] * dim), indexing="ij"), axis=-1).reshape(-1, dim)  # x_j - x_i
+    r = np.sqrt((off * off).sum(axis=1))
+    keep = (r > 0.0) & (r < support)
+    for a in range(m):
+        keep &= d[a] + off[:, a] > 0.0
+    off, r = off[keep], r[keep]
+    f = dx ** dim * np.array([kernel_f(kernel_id, ri, h, dim) for ri in r])
+    dsum = -(f[:, None] * off).sum(axis=0)  # grad_i W_ij = F (x_i - x_j)
+    x = np.zeros(dim)
+    x[:m] = d
+    normals = np.eye(dim)[:m]
+    out = np.zeros(2 * m + 2)
+    g3 = np.zeros(3)
+    if m < dim:  # first moment along the first axis parallel to every wall
+        g3[m] = 1.0
+    s, g, tg = wall_terms_at(x, normals, np.zeros(m), kernel_id, h, g3)
+    out[:m] = dsum[:m] + g[:m]  # E = D + G (1/m)
+    out[m:2 * m] = dsum[:m]
+    if m < dim:
+        bsum = -(f * off[:, m] ** 2).sum()
+        out[2 * m] = bsum + lam * (tg[m] + s) - lam
+        out[2 * m + 1] = bsum
+    return out
+
+
+def lattice_error_tables(kernel_id: int, h: float, dx: float, dim: int, lam: float):
+    """(nodes (K,), tab1 (K, 4), tab2 (K*K, 6), tab3 (K**3, 8)): the node distances (m) and,
+    for 1, 2 and 3 perpendicular walls, (E_1..E_m, D_1..D_m (1/m), F, B) at every node
+    combination (row-major, see :func:`_node_error`); tab3 is empty in 2D."""
+    support = 2.0 * h
+    nodes = [(k + 0.5) * dx for k in range(int(math.ceil(support / dx)) + 1) if (k + 0.5) * dx < support]
+    nodes = np.array(nodes + [support])
+    tabs = []
+    for m in (1, 2, 3):
+        if m > dim:
+            tabs.append(np.zeros((0, 2 * m + 2)))
+            continue
+        grid = np.stack(np.meshgrid(*([nodes] * m), indexing="ij"), axis=-1).reshape(-1, m)
+        tabs.append(np.array([_node_error(kernel_id, h, dx, dim, lam, d) for d in grid]))
+    return (nodes, *tabs)
+
+
+@njit(cache=True, inline="always")
+def _locate(nodes, d):
+    """(index, fraction) of d between nodes, clamped to the first and last node."""
+    K = nodes.shape[0]
+    if d <= nodes[0]:
+        return 0, 0.0
+    for k in range(1, K):
+        if d < nodes[k]:
+            return k - 1, (d - nodes[k - 1]) / (nodes[k] - nodes[k - 1])
+    return K - 2, 1.0
+
+
+@njit(cache=True)
+def _interp(nodes, tab, m, dd, col):
+    """Multilinear value of column ``col`` of the m-wall table at distances dd[:m]."""
+    K = nodes.shape[0]
+    i0, f0 = _locate(nodes, dd[0])
+    i1, f1 = (0, 0.0) if m < 2 else _locate(nodes, dd[1])
+    i2, f2 = (0, 0.0) if m < 3 else _locate(nodes, dd[2])
+    v = 0.0
+    for c in range(1 << m):
+        w = 1.0
+        idx = 0
+        for a in range(m):
+            bit = (c >> a) & 1
+            ia, fa = (i0, f0) if a == 0 else ((i1, f1) if a == 1 else (i2, f2))
+            w *= fa if bit else 1.0 - fa
+            idx = idx * K + ia + bit
+        if w != 0.0:
+            v += w * tab[idx, col]
+    return v
+
+
+@njit(cache=True)
+def subtract_lattice_error(pos, vol, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad,
+                           hydro):
+    """Per particle, over the walls within ``support`` (inward normals n_a): grad (n, dim,
+    1/m) -= sum_a E_a n_a and hydro (n, dim, m/s^2) -= (F / lam) (g - sum_a (g . n_a) n_a).
+
+    ``vol`` (n,): the particle's volume m/rho over the lattice's dx^dim. The tables hold
+    the truncated sums D and B for lattice volumes; a particle whose neighbours are
+    compressed (hydrostatic density, 0.5% at the floor of a 0.4 m tank) has sums vol
+    times those, so E and F are taken as E + (vol - 1) D and F + (vol - 1) B."""
+    n, dim = pos.shape
+    nk = normals.shape[0]
+    near = np.empty(nk, np.int64)
+    dd = np.zeros(3)
+    for i in range(n):
+        m = 0
+        for k in range(nk):
+            d = -offsets[k]
+            for a in range(dim):
+                d += normals[k, a] * pos[i, a]
+            if d < support:
+                near[m] = k
+                m += 1
+        if m == 0:
+            continue
+        perp = m <= dim
+        for a in range(m):
+            for b in range(a + 1, m):
+                c = 0.0
+                for x in range(dim):
+                    c += normals[near[a], x] * normals[near[b], x]
+                if abs(c) > PERP_TOL:
+                    perp = False
+        groups = 1 if perp else m  # perpendicular walls: one orthant table; else plane by plane
+        for grp in range(groups):
+            mm = m if perp else 1
+            for a in range(mm):
+                k = near[a] if perp else near[grp]
+                d = -offsets[k]
+                for x in range(dim):
+                    d += normals[k, x] * pos[i, x]
+                dd[a] = d
+            tab = tab1 if mm == 1 else (tab2 if mm == 2 else tab3)
+            v1 = vol[i] - 1.0
+            f = (_interp(nodes, tab, mm, dd, 2 * mm) + v1 * _interp(nodes, tab, mm, dd, 2 * mm + 1)) / lam
+            gt0, gt1, gt2 = gravity[0], gravity[1], gravity[2]
+            for a in range(mm):
+                k = near[a] if perp else near[grp]
+                e = _interp(nodes, tab, mm, dd, a) + v1 * _interp(nodes, tab, mm, dd, mm + a)
+                gn = normals[k, 0] * gravity[0] + normals[k, 1] * gravity[1]
+                if dim == 3:
+                    gn += normals[k, 2] * gravity[2]
+                gt0 -= gn * normals[k, 0]
+                gt1 -= gn * normals[k, 1]
+                if dim == 3:
+                    gt2 -= gn * normals[k, 2]
+                for x in range(dim):
+                    grad[i, x] -= e * normals[k, x]
+            if f != 0.0:
+                hydro[i, 0] -= f * gt0
+                hydro[i, 1] -= f * gt1
+                if dim == 3:
+                    hydro[i, 2] -= f * gt2
