@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from sphcore.api import kernel_f
 
@@ -99,13 +99,13 @@ def _locate(nodes, d):
     return K - 2, 1.0
 
 
-@njit(cache=True)
-def _interp(nodes, tab, m, dd, col):
-    """Multilinear value of column ``col`` of the m-wall table at distances dd[:m]."""
+@njit(cache=True, inline="always")
+def _interp(nodes, tab, m, d0, d1, d2, col):
+    """Multilinear value of column ``col`` of the m-wall table at distances (d0, d1, d2)[:m]."""
     K = nodes.shape[0]
-    i0, f0 = _locate(nodes, dd[0])
-    i1, f1 = (0, 0.0) if m < 2 else _locate(nodes, dd[1])
-    i2, f2 = (0, 0.0) if m < 3 else _locate(nodes, dd[2])
+    i0, f0 = _locate(nodes, d0)
+    i1, f1 = (0, 0.0) if m < 2 else _locate(nodes, d1)
+    i2, f2 = (0, 0.0) if m < 3 else _locate(nodes, d2)
     v = 0.0
     for c in range(1 << m):
         w = 1.0
@@ -120,66 +120,96 @@ def _interp(nodes, tab, m, dd, col):
     return v
 
 
-@njit(cache=True)
-def subtract_lattice_error(pos, vol, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad,
-                           hydro):
-    """Per particle, over the walls within ``support`` (inward normals n_a): grad (n, dim,
-    1/m) -= sum_a E_a n_a and hydro (n, dim, m/s^2) -= (F / lam) (g - sum_a (g . n_a) n_a).
+@njit(cache=True, inline="always")
+def _dist(normals, offsets, k, pos, i, dim):
+    d = -offsets[k]
+    for a in range(dim):
+        d += normals[k, a] * pos[i, a]
+    return d
 
-    ``vol`` (n,): the particle's volume m/rho over the lattice's dx^dim. The tables hold
-    the truncated sums D and B for lattice volumes; a particle whose neighbours are
-    compressed (hydrostatic density, 0.5% at the floor of a 0.4 m tank) has sums vol
-    times those, so E and F are taken as E + (vol - 1) D and F + (vol - 1) B."""
+
+@njit(cache=True, inline="always")
+def _apply(normals, k, dim, e, f, gravity, grad, hydro, i):
+    """grad_i -= e n_k; hydro_i -= f (g - (g . n_k) n_k) (one plane's share)."""
+    gn = 0.0
+    for a in range(dim):
+        gn += normals[k, a] * gravity[a]
+    for a in range(dim):
+        grad[i, a] -= e * normals[k, a]
+        hydro[i, a] -= f * (gravity[a] - gn * normals[k, a])
+
+
+@njit(cache=True, parallel=True)
+def subtract_lattice_error(pos, m, rho, cell_volume, normals, offsets, nodes, tab1, tab2, tab3, support, lam,
+                           gravity, grad, hydro):
+    """Per particle, over the walls within ``support`` (inward normals n_a): grad (n, dim,
+    1/m) -= sum_a E_a n_a and hydro (n, dim, m/s^2) -= (F / lam) g_t, g_t the part of g
+    along every one of those walls.
+
+    The tables hold the truncated sums D and B for lattice volumes dx^dim (``cell_volume``);
+    a particle of volume v = m / rho (its neighbours compressed alike: hydrostatic density
+    is 0.5% above rho0 at the floor of a 0.4 m tank) has sums v / dx^dim times those, so
+    E + (v / dx^dim - 1) D and F + (v / dx^dim - 1) B are used. Up to ``dim`` mutually
+    perpendicular walls take one orthant table; other combinations (a V tank's apex) add
+    their single-wall errors.
+    """
     n, dim = pos.shape
     nk = normals.shape[0]
-    near = np.empty(nk, np.int64)
-    dd = np.zeros(3)
-    for i in range(n):
-        m = 0
+    for i in prange(n):
+        cnt = 0
+        k0 = k1 = k2 = -1
         for k in range(nk):
-            d = -offsets[k]
-            for a in range(dim):
-                d += normals[k, a] * pos[i, a]
-            if d < support:
-                near[m] = k
-                m += 1
-        if m == 0:
+            if _dist(normals, offsets, k, pos, i, dim) < support:
+                if cnt == 0:
+                    k0 = k
+                elif cnt == 1:
+                    k1 = k
+                elif cnt == 2:
+                    k2 = k
+                cnt += 1
+        if cnt == 0:
             continue
-        perp = m <= dim
-        for a in range(m):
-            for b in range(a + 1, m):
-                c = 0.0
-                for x in range(dim):
-                    c += normals[near[a], x] * normals[near[b], x]
-                if abs(c) > PERP_TOL:
-                    perp = False
-        groups = 1 if perp else m  # perpendicular walls: one orthant table; else plane by plane
-        for grp in range(groups):
-            mm = m if perp else 1
-            for a in range(mm):
-                k = near[a] if perp else near[grp]
-                d = -offsets[k]
-                for x in range(dim):
-                    d += normals[k, x] * pos[i, x]
-                dd[a] = d
-            tab = tab1 if mm == 1 else (tab2 if mm == 2 else tab3)
-            v1 = vol[i] - 1.0
-            f = (_interp(nodes, tab, mm, dd, 2 * mm) + v1 * _interp(nodes, tab, mm, dd, 2 * mm + 1)) / lam
-            gt0, gt1, gt2 = gravity[0], gravity[1], gravity[2]
-            for a in range(mm):
-                k = near[a] if perp else near[grp]
-                e = _interp(nodes, tab, mm, dd, a) + v1 * _interp(nodes, tab, mm, dd, mm + a)
+        v1 = m[i] / (rho[i] * cell_volume) - 1.0
+        perp = cnt <= dim
+        if perp and cnt >= 2:
+            c01 = 0.0
+            c02 = 0.0
+            c12 = 0.0
+            for a in range(dim):
+                c01 += normals[k0, a] * normals[k1, a]
+                if cnt == 3:
+                    c02 += normals[k0, a] * normals[k2, a]
+                    c12 += normals[k1, a] * normals[k2, a]
+            perp = abs(c01) <= PERP_TOL and abs(c02) <= PERP_TOL and abs(c12) <= PERP_TOL
+        if perp:
+            tab = tab1 if cnt == 1 else (tab2 if cnt == 2 else tab3)
+            d0 = _dist(normals, offsets, k0, pos, i, dim)
+            d1 = _dist(normals, offsets, k1, pos, i, dim) if cnt > 1 else 0.0
+            d2 = _dist(normals, offsets, k2, pos, i, dim) if cnt > 2 else 0.0
+            f = (_interp(nodes, tab, cnt, d0, d1, d2, 2 * cnt)
+                 + v1 * _interp(nodes, tab, cnt, d0, d1, d2, 2 * cnt + 1)) / lam
+            # the first moment's error lies along the walls: g minus its parts along every normal
+            g0, g1, g2 = gravity[0], gravity[1], gravity[2]
+            for a in range(cnt):
+                k = k0 if a == 0 else (k1 if a == 1 else k2)
                 gn = normals[k, 0] * gravity[0] + normals[k, 1] * gravity[1]
                 if dim == 3:
                     gn += normals[k, 2] * gravity[2]
-                gt0 -= gn * normals[k, 0]
-                gt1 -= gn * normals[k, 1]
+                g0 -= gn * normals[k, 0]
+                g1 -= gn * normals[k, 1]
                 if dim == 3:
-                    gt2 -= gn * normals[k, 2]
+                    g2 -= gn * normals[k, 2]
+                e = _interp(nodes, tab, cnt, d0, d1, d2, a) + v1 * _interp(nodes, tab, cnt, d0, d1, d2, cnt + a)
                 for x in range(dim):
                     grad[i, x] -= e * normals[k, x]
-            if f != 0.0:
-                hydro[i, 0] -= f * gt0
-                hydro[i, 1] -= f * gt1
-                if dim == 3:
-                    hydro[i, 2] -= f * gt2
+            hydro[i, 0] -= f * g0
+            hydro[i, 1] -= f * g1
+            if dim == 3:
+                hydro[i, 2] -= f * g2
+        else:
+            for k in range(nk):
+                d = _dist(normals, offsets, k, pos, i, dim)
+                if d < support:
+                    e = _interp(nodes, tab1, 1, d, 0.0, 0.0, 0) + v1 * _interp(nodes, tab1, 1, d, 0.0, 0.0, 1)
+                    f = (_interp(nodes, tab1, 1, d, 0.0, 0.0, 2) + v1 * _interp(nodes, tab1, 1, d, 0.0, 0.0, 3)) / lam
+                    _apply(normals, k, dim, e, f, gravity, grad, hydro, i)
