@@ -6,7 +6,9 @@
 Runs (probes sampled in-run, no VTU/netCDF frames):
 - cases/dam_break_buchner (H = 0.6 m, dx = H/40): P1 and P2 against Buchner (2002);
 - cases/dam_break_lobovsky (H = 0.3 m, dx = H/40): sensor 2 against Lobovsky et al. (2014);
-- cases/hydrostatic_tank with plain Tait pressure (no modified pressure), 5 s;
+- cases/hydrostatic_tank with plain Tait pressure (no modified pressure), 5 s: at the case's
+  defaults (h = 1.3 dx, no density diffusion), with hydrostatic density diffusion
+  (delta = 0.1), and with it at h = 2 dx;
 - cases/dam_break (the seed's): front against Cruchaga and Martin & Moyce, residual column
   height at the back wall against Martin & Moyce;
 each with the reflective walls alone, reflective + the wall model (``wall_integral``), and
@@ -31,10 +33,14 @@ VARIANTS = {
     "reflective + wall model": ["reflective", "wall_integral"],
     "ghost + reflective": ["ghost", "reflective"],
 }
+DELTA = ["density_diffusion.delta=0.1", "density_diffusion.hydrostatic=true"]
 CASES = {
     "buchner": ("dam_break_buchner", ["probes"], None),
     "lobovsky": ("dam_break_lobovsky", ["probes"], None),
     "tank": ("hydrostatic_tank", ["pressure_gauge"], ["physics.modified_pressure=false"]),
+    "tank_delta": ("hydrostatic_tank", ["pressure_gauge"], ["physics.modified_pressure=false", *DELTA]),
+    "tank_delta_h2": ("hydrostatic_tank", ["pressure_gauge"],
+                      ["physics.modified_pressure=false", *DELTA, "kernel.h_over_dx=2.0"]),
     "dam_break": ("dam_break", ["front_gauge"], ["front_gauge.wall_height=true"]),
 }
 
@@ -57,10 +63,12 @@ def figures(key, s) -> str:
         return (f"in band {fmt(p.get('probe_sensor2_in_band_fraction'), True)}, peak "
                 f"{fmt(p.get('probe_sensor2_peak_rhogH'))} rho g H (band {fmt(p.get('probe_sensor2_band_peak_lo_rhogH'))}"
                 f"-{fmt(p.get('probe_sensor2_band_peak_hi_rhogH'))})")
-    if key == "tank":
+    if key.startswith("tank"):
         g = s.get("pressure_gauge", {})
         return (f"worst layer {fmt(g.get('pressure_max_layer_err'), True)}, largest displacement "
-                f"{fmt(g.get('max_displacement_m', math.nan) / 0.02)} dx, lost {g.get('particles_lost', '-')}")
+                f"{fmt(g.get('max_displacement_m', math.nan) / 0.02)} dx "
+                f"({fmt(g.get('max_displacement_below_top_m', math.nan) / 0.02)} dx below the top two layers), "
+                f"lost {g.get('particles_lost', '-')}")
     f = s.get("front_gauge", {})
     return (f"front {fmt(f.get('err_cruchaga_0.10s'), True)} / {fmt(f.get('err_cruchaga_0.20s'), True)} vs Cruchaga, "
             f"RMS {fmt(f.get('rms_rel_err_martin_moyce_T3'), True)} vs M&M; wall height RMS "
@@ -82,7 +90,7 @@ def main(argv=None):
         for label, plugins in VARIANTS.items():
             out = work / f"{key}_{plugins[-1]}_{len(plugins)}"
             overrides = [f'plugins.use={plugins + extra}'.replace("'", '"')] + (sets or [])
-            t_end = args.tank_t_end if key == "tank" else None
+            t_end = args.tank_t_end if key.startswith("tank") else None
             s = runner.run(ROOT / "cases" / case, output=out, overrides=overrides, t_end=t_end, overwrite=True,
                            quiet=True)
             row = f"| {case} | {label} | {figures(key, s)} | {s['wall_time_s']:.0f} |"

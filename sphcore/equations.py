@@ -63,8 +63,11 @@ class WallTerms(NamedTuple):
     moment of the wall pressure; ``normals`` (n, dim, dim): the orthogonal projector onto
     the normals of the walls within the particle's support (n n^T near one plane, the
     identity in a corner), the directions in which its missing support is wall rather than
-    free surface; ``active``: false when no plugin supplies them (skipped). Plugins fill
-    them in the ``sph_wall_terms`` hook; share, grad and hydro of several plugins add up,
+    free surface; ``fill`` (n,): the neighbour sum sum_j V_j W_ij (self excluded) that a
+    particle of the initial lattice has at that place, against which the core measures how
+    full the particle's own neighbourhood is (0: not supplied, no scaling); ``active``:
+    false when no plugin supplies them (skipped). Plugins fill them in the
+    ``sph_wall_terms`` hook; share, grad, hydro and fill of several plugins add up,
     ``normals`` is replaced by the projector onto the span of both.
     """
 
@@ -72,6 +75,7 @@ class WallTerms(NamedTuple):
     grad: np.ndarray
     hydro: np.ndarray
     normals: np.ndarray
+    fill: np.ndarray
     active: bool
 
 
@@ -107,6 +111,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
         a2 = 0.0
         dr = 0.0
         b0 = 0.0  # b = sum_j V_j grad_i W_ij (x_j - x_i) . g, for the wall completion
+        gam = 0.0  # sum_j V_j W_ij, the particle's own neighbour sum (wall completion)
         b1 = 0.0
         b2 = 0.0
         pi_r = p[i] / (rho[i] * rho[i])
@@ -137,6 +142,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
                 mj = m[j]
                 dr += mj * (v0 * g0 + v1 * g1 + v2 * g2)
                 if near:
+                    gam += mj / rho[j] * kernel_w(prm.kernel_id, np.sqrt(r2), h, dim)
                     vr = -mj / rho[j] * (x0 * gravity[0] + x1 * gravity[1] + x2 * gravity[2])
                     b0 += vr * g0
                     b1 += vr * g1
@@ -160,7 +166,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
                     a2 += lam * v2
         if near:
             a0, a1, a2, dr = _complete_at_wall(wall, i, dim, vel, rho[i], p[i], prm.rho_ref, prm.moment_norm, gravity,
-                                               a0, a1, a2, dr, b0, b1, b2)
+                                               a0, a1, a2, dr, b0, b1, b2, gam)
         gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
         acc[i, 0] = gscale * gravity[0] + a0
         acc[i, 1] = gscale * gravity[1] + a1
@@ -170,7 +176,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
 
 
 @njit(cache=True, inline="always")
-def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2):
+def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam):
     """Add the wall's boundary integrals to particle i's sums (module docstring).
 
     The wall stands for the missing part of the support, filled with the mirror image of
@@ -188,10 +194,19 @@ def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, 
     (The discrete complement -Q D of the particle's own sum, used before, balances any
     arrangement but does not depend on the wall distance at all: particles then rested on
     the reflective contact, not on the wall pressure.)
+
+    The whole completion is scaled by phi = min(1, gam / wall.fill), the particle's own
+    neighbour sum against the initial lattice's at that place: the mirror image of a full
+    neighbourhood is the lattice the wall terms stand for, the mirror image of a splash
+    particle or of a thin film is (nearly) nothing. Without it a lone particle near a wall
+    would be pushed and decompressed as if the fluid surrounded it (measured: a splash
+    particle of the Lobovsky impact fell below 0.5 rho0). phi = 1 on the initial lattice.
     """
-    w0 = wall.grad[i, 0]
-    w1 = wall.grad[i, 1]
-    w2 = wall.grad[i, 2] if dim == 3 else 0.0
+    ref = wall.fill[i]
+    phi = min(1.0, gam / ref) if ref > 0.0 else 1.0
+    w0 = phi * wall.grad[i, 0]
+    w1 = phi * wall.grad[i, 1]
+    w2 = phi * wall.grad[i, 2] if dim == 3 else 0.0
     q = wall.normals
     # first moment: along the wall normals the discrete complement (lam I - B) g of the
     # particle's own sum b = B g, so that the hydrostatic pressure of the particles is in
@@ -206,9 +221,9 @@ def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, 
     t1 = lam * (wall.hydro[i, 1] + s * gravity[1])
     t2 = lam * (wall.hydro[i, 2] + s * gravity[2]) if dim == 3 else 0.0
     tn0, tn1, tn2 = _project(q, i, dim, t0, t1, t2)
-    h0 = en0 + t0 - tn0
-    h1 = en1 + t1 - tn1
-    h2 = en2 + t2 - tn2
+    h0 = phi * en0 + t0 - tn0
+    h1 = phi * en1 + t1 - tn1
+    h2 = phi * en2 + t2 - tn2
     cp = 2.0 * p_i / rho_i
     ch = (rho_i - rho_ref) / rho_i
     a0 -= cp * w0 + ch * h0

@@ -60,7 +60,8 @@ class Forces:
         self._L = np.zeros((1, 3, 3))
         self._grid = None
         self._shepard = np.zeros(1)
-        self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), False)
+        self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0),
+                               False)
 
     # -- pieces -----------------------------------------------------------------------
 
@@ -100,12 +101,14 @@ class Forces:
             return self._wall
         n, dim = self.ctx.state.n, self.ctx.params.dim
         if self._wall.share.shape[0] != n:
-            self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)), True)
+            self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)),
+                                   np.zeros(n), True)
         w = self._wall
         w.share[:] = 0.0
         w.grad[:] = 0.0
         w.hydro[:] = 0.0
         w.normals[:] = 0.0
+        w.fill[:] = 0.0
         self.hook.sph_wall_terms(ctx=self.ctx, terms=w)
         self.ctx.counters["wall_terms"] += 1
         return w

@@ -73,8 +73,8 @@ class WallIntegralPlugin:
                    self.hydro)
         if self._table is None:
             self._table = lattice_error_tables(prm.kernel_id, prm.h, prm.dx, dim, prm.moment_norm)
-        subtract_lattice_error(st.pos, st.m, st.rho, prm.dx ** dim, self.normals, self.offsets, *self._table,
-                               prm.support, prm.moment_norm, prm.gravity, self.grad, self.hydro)
+        subtract_lattice_error(st.pos, self.normals, self.offsets, *self._table, prm.support, prm.moment_norm,
+                               prm.gravity, self.grad, self.hydro, terms.fill)
         np.add(terms.share, self.share, out=terms.share)  # several wall plugins add up
         np.add(terms.grad, self.grad, out=terms.grad)
         np.add(terms.hydro, self.hydro, out=terms.hydro)

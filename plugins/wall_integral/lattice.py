@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphcore.api import kernel_f
+from sphcore.api import kernel_f, kernel_w
 
 from .share import wall_terms_at
 
@@ -38,9 +38,10 @@ PERP_TOL = 1e-9  # |n_a . n_b| below this: perpendicular planes
 
 
 def _node_error(kernel_id, h, dx, dim, lam, d):
-    """(E_1..E_m, D_1..D_m, F, B) of a lattice node at distances d (m,) from m perpendicular
-    walls x_a = 0 (a < m), the fluid at x_a > 0: E = D + G and F = B + lam A_t - lam, with
-    D the truncated sum and B its first moment along the walls (lattice volumes dx^dim)."""
+    """(E_1..E_m, F, Gamma) of a lattice node at distances d (m,) from m perpendicular walls
+    x_a = 0 (a < m), the fluid at x_a > 0: E = D + G, F = B + lam A_t - lam and
+    Gamma = sum_j V_j W_ij over the neighbours (self excluded), with D the truncated
+    gradient sum and B its first moment along the walls (lattice volumes dx^dim)."""
     m = len(d)
     support = 2.0 * h
     n = int(math.ceil(support / dx))
@@ -56,31 +57,30 @@ def _node_error(kernel_id, h, dx, dim, lam, d):
     x = np.zeros(dim)
     x[:m] = d
     normals = np.eye(dim)[:m]
-    out = np.zeros(2 * m + 2)
+    out = np.zeros(m + 2)
     g3 = np.zeros(3)
     if m < dim:  # first moment along the first axis parallel to every wall
         g3[m] = 1.0
     s, g, tg = wall_terms_at(x, normals, np.zeros(m), kernel_id, h, g3)
     out[:m] = dsum[:m] + g[:m]  # E = D + G (1/m)
-    out[m:2 * m] = dsum[:m]
+    out[m + 1] = dx ** dim * sum(kernel_w(kernel_id, ri, h, dim) for ri in r)
     if m < dim:
         bsum = -(f * off[:, m] ** 2).sum()
-        out[2 * m] = bsum + lam * (tg[m] + s) - lam
-        out[2 * m + 1] = bsum
+        out[m] = bsum + lam * (tg[m] + s) - lam
     return out
 
 
 def lattice_error_tables(kernel_id: int, h: float, dx: float, dim: int, lam: float):
-    """(nodes (K,), tab1 (K, 4), tab2 (K*K, 6), tab3 (K**3, 8)): the node distances (m) and,
-    for 1, 2 and 3 perpendicular walls, (E_1..E_m, D_1..D_m (1/m), F, B) at every node
-    combination (row-major, see :func:`_node_error`); tab3 is empty in 2D."""
+    """(nodes (K,), tab1 (K, 3), tab2 (K*K, 4), tab3 (K**3, 5)): the node distances (m) and,
+    for 1, 2 and 3 perpendicular walls, (E_1..E_m (1/m), F, Gamma) at every node combination
+    (row-major, see :func:`_node_error`); tab3 is empty in 2D."""
     support = 2.0 * h
     nodes = [(k + 0.5) * dx for k in range(int(math.ceil(support / dx)) + 1) if (k + 0.5) * dx < support]
     nodes = np.array(nodes + [support])
     tabs = []
     for m in (1, 2, 3):
         if m > dim:
-            tabs.append(np.zeros((0, 2 * m + 2)))
+            tabs.append(np.zeros((0, m + 2)))
             continue
         grid = np.stack(np.meshgrid(*([nodes] * m), indexing="ij"), axis=-1).reshape(-1, m)
         tabs.append(np.array([_node_error(kernel_id, h, dx, dim, lam, d) for d in grid]))
@@ -128,33 +128,21 @@ def _dist(normals, offsets, k, pos, i, dim):
     return d
 
 
-@njit(cache=True, inline="always")
-def _apply(normals, k, dim, e, f, gravity, grad, hydro, i):
-    """grad_i -= e n_k; hydro_i -= f (g - (g . n_k) n_k) (one plane's share)."""
-    gn = 0.0
-    for a in range(dim):
-        gn += normals[k, a] * gravity[a]
-    for a in range(dim):
-        grad[i, a] -= e * normals[k, a]
-        hydro[i, a] -= f * (gravity[a] - gn * normals[k, a])
-
-
 @njit(cache=True, parallel=True)
-def subtract_lattice_error(pos, m, rho, cell_volume, normals, offsets, nodes, tab1, tab2, tab3, support, lam,
-                           gravity, grad, hydro):
+def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad, hydro,
+                           fill):
     """Per particle, over the walls within ``support`` (inward normals n_a): grad (n, dim,
-    1/m) -= sum_a E_a n_a and hydro (n, dim, m/s^2) -= (F / lam) g_t, g_t the part of g
-    along every one of those walls.
-
-    The tables hold the truncated sums D and B for lattice volumes dx^dim (``cell_volume``);
-    a particle of volume v = m / rho (its neighbours compressed alike: hydrostatic density
-    is 0.5% above rho0 at the floor of a 0.4 m tank) has sums v / dx^dim times those, so
-    E + (v / dx^dim - 1) D and F + (v / dx^dim - 1) B are used. Up to ``dim`` mutually
-    perpendicular walls take one orthant table; other combinations (a V tank's apex) add
-    their single-wall errors.
+    1/m) -= sum_a E_a n_a, hydro (n, dim, m/s^2) -= (F / lam) g_t (g_t the part of g along
+    every one of those walls) and fill (n,) += Gamma, the neighbour sum sum_j V_j W_ij a
+    particle of the initial lattice has there (the core compares the particle's own sum
+    with it: a particle with fewer neighbours than the lattice, a splash or a film, gets a
+    proportionally smaller wall completion). Up to ``dim`` mutually perpendicular walls take
+    one orthant table; other combinations (a V tank's apex) add their single-wall errors
+    and deficits of Gamma.
     """
     n, dim = pos.shape
     nk = normals.shape[0]
+    full = tab1[tab1.shape[0] - 1, 2]  # Gamma of an interior particle (last node: 2h from the wall)
     for i in prange(n):
         cnt = 0
         k0 = k1 = k2 = -1
@@ -169,7 +157,6 @@ def subtract_lattice_error(pos, m, rho, cell_volume, normals, offsets, nodes, ta
                 cnt += 1
         if cnt == 0:
             continue
-        v1 = m[i] / (rho[i] * cell_volume) - 1.0
         perp = cnt <= dim
         if perp and cnt >= 2:
             c01 = 0.0
@@ -186,8 +173,8 @@ def subtract_lattice_error(pos, m, rho, cell_volume, normals, offsets, nodes, ta
             d0 = _dist(normals, offsets, k0, pos, i, dim)
             d1 = _dist(normals, offsets, k1, pos, i, dim) if cnt > 1 else 0.0
             d2 = _dist(normals, offsets, k2, pos, i, dim) if cnt > 2 else 0.0
-            f = (_interp(nodes, tab, cnt, d0, d1, d2, 2 * cnt)
-                 + v1 * _interp(nodes, tab, cnt, d0, d1, d2, 2 * cnt + 1)) / lam
+            f = _interp(nodes, tab, cnt, d0, d1, d2, cnt) / lam
+            fill[i] += _interp(nodes, tab, cnt, d0, d1, d2, cnt + 1)
             # the first moment's error lies along the walls: g minus its parts along every normal
             g0, g1, g2 = gravity[0], gravity[1], gravity[2]
             for a in range(cnt):
@@ -199,7 +186,7 @@ def subtract_lattice_error(pos, m, rho, cell_volume, normals, offsets, nodes, ta
                 g1 -= gn * normals[k, 1]
                 if dim == 3:
                     g2 -= gn * normals[k, 2]
-                e = _interp(nodes, tab, cnt, d0, d1, d2, a) + v1 * _interp(nodes, tab, cnt, d0, d1, d2, cnt + a)
+                e = _interp(nodes, tab, cnt, d0, d1, d2, a)
                 for x in range(dim):
                     grad[i, x] -= e * normals[k, x]
             hydro[i, 0] -= f * g0
@@ -207,9 +194,17 @@ def subtract_lattice_error(pos, m, rho, cell_volume, normals, offsets, nodes, ta
             if dim == 3:
                 hydro[i, 2] -= f * g2
         else:
+            gam = full
             for k in range(nk):
                 d = _dist(normals, offsets, k, pos, i, dim)
                 if d < support:
-                    e = _interp(nodes, tab1, 1, d, 0.0, 0.0, 0) + v1 * _interp(nodes, tab1, 1, d, 0.0, 0.0, 1)
-                    f = (_interp(nodes, tab1, 1, d, 0.0, 0.0, 2) + v1 * _interp(nodes, tab1, 1, d, 0.0, 0.0, 3)) / lam
-                    _apply(normals, k, dim, e, f, gravity, grad, hydro, i)
+                    e = _interp(nodes, tab1, 1, d, 0.0, 0.0, 0)
+                    f = _interp(nodes, tab1, 1, d, 0.0, 0.0, 1) / lam
+                    gam -= full - _interp(nodes, tab1, 1, d, 0.0, 0.0, 2)
+                    gn = 0.0
+                    for a in range(dim):
+                        gn += normals[k, a] * gravity[a]
+                    for a in range(dim):
+                        grad[i, a] -= e * normals[k, a]
+                        hydro[i, a] -= f * (gravity[a] - gn * normals[k, a])
+            fill[i] += max(gam, 0.0)
