@@ -136,8 +136,12 @@ def _options(only=None) -> int:
         if not info.error:
             tables.update({(name, t): schema for t, schema in (info.tables or {}).items()})
     owners = {o for o, _ in tables}
+    usable = {name for name, info in pluginhost.available().items() if not info.error}
     if only is not None and only not in owners:
-        return _fail(f"no plugin {only!r} (known: {', '.join(sorted(owners))})", 2)
+        if only in usable:  # a plugin that takes no options is still a plugin
+            print(f"plugin {only}: no options (select it with [plugins] use = [..., \"{only}\"])")
+            return 0
+        return _fail(f"no plugin {only!r} (known: {', '.join(sorted(owners | usable))})", 2)
     for (owner, table), schema in tables.items():
         if only is not None and owner != only:
             continue

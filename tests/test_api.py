@@ -110,3 +110,12 @@ def test_indexed_override_in_run_and_check(tmp_path, capsys):
     assert cli.main(["check", str(case_dir), "--set", "blocks[3].max=[0.08,0.06]"]) == 2
     err = capsys.readouterr().err
     assert "blocks[3].max" in err and "out of range" in err
+
+
+def test_options_of_a_plugin_without_options_says_so(capsys):
+    """`sph options wall_integral` (a plugin with no table) answers, exit 0; an unknown
+    name is refused with exit 2 and the known names, plugins without options included."""
+    assert cli.main(["options", "wall_integral"]) == 0
+    assert "no options" in capsys.readouterr().out
+    assert cli.main(["options", "nothere"]) == 2
+    assert "wall_integral" in capsys.readouterr().err
