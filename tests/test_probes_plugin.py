@@ -201,11 +201,16 @@ def test_probes_without_output_directory_still_summarise(tmp_path):
 # ---------------------------------------------------------------------------- post-processing
 
 
-def _postprocessing():
-    spec = importlib.util.spec_from_file_location("pp_probes", ROOT / "postprocessing" / "probes.py")
+def _script(name):
+    """postprocessing/<name>.py as a module (the scripts are not a package)."""
+    spec = importlib.util.spec_from_file_location(f"pp_{name}", ROOT / "postprocessing" / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def _postprocessing():
+    return _script("probes")
 
 
 def test_postprocessing_plots_each_probe_and_prints_the_figures(tiny_run, capsys):
@@ -284,13 +289,6 @@ def test_pressure_cases_put_their_sensors_on_the_downstream_wall_at_the_publishe
     assert case_.config["time"]["t_end"] * math.sqrt(9.81 / p.height) >= 6.5
 
 
-def _peer_script():
-    spec = importlib.util.spec_from_file_location("pp_peer", ROOT / "postprocessing" / "peer_series.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def test_peer_series_scores_the_experiment_itself_as_exact(tmp_path, capsys):
     """Buchner's P1 points, written as a peer's series in s and Pa (CSV and JSON), score
     MAE 0 and a first rise equal to the experiment's; a bad key or file exits 2."""
@@ -303,7 +301,7 @@ def test_peer_series_scores_the_experiment_itself_as_exact(tmp_path, capsys):
     csv.write_text("time_s,p_pa\n" + "\n".join(f"{float(a)!r},{float(b)!r}" for a, b in zip(t, p)))
     js = tmp_path / "peer.json"
     js.write_text(json.dumps({"P1": {"time": t.tolist(), "values": p.tolist()}}))
-    peer = _peer_script()
+    peer = _script("peer_series")
     for args in ([str(csv)], [str(js), "--key", "P1"]):
         assert peer.main(args + ["--reference", "buchner_2002_P1", "--H", "0.6"]) == 0
         out = dict(line.split(" = ") for line in capsys.readouterr().out.splitlines())
