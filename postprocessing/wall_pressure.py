@@ -1,7 +1,7 @@
 """Wall pressure against experiment for each boundary treatment: one table, one plot per probe.
 
-    python postprocessing/wall_pressure.py [--tank-t-end 5.0] [--only buchner,lobovsky,tank,dam_break]
-                                           [--out docs/wall_pressure_runs.md]
+    python postprocessing/wall_pressure.py [--tank-t-end 5.0] [--only buchner,lobovsky,tank,tank_delta,tank_delta_h2,dam_break]
+                                           [--out docs/wall_pressure_runs.md] [--plots docs/wall_pressure]
 
 Runs (probes sampled in-run, no VTU/netCDF frames):
 - cases/dam_break_buchner (H = 0.6 m, dx = H/40): P1 and P2 against Buchner (2002);
@@ -85,9 +85,10 @@ def main(argv=None):
     ap.add_argument("--tank-t-end", type=float, default=5.0)
     ap.add_argument("--only", default=",".join(CASES))
     ap.add_argument("--out", default=str(ROOT / "docs" / "wall_pressure_runs.md"))
+    ap.add_argument("--plots", default=str(ROOT / "docs" / "wall_pressure"), help="folder for the probe plots")
     args = ap.parse_args(argv)
     work = Path(tempfile.mkdtemp(prefix="sph-walls-"))
-    plots = Path(args.out).with_suffix("")
+    plots = Path(args.plots)
     plots.mkdir(parents=True, exist_ok=True)
     lines = ["| case | boundary | figures | wall s |", "|---|---|---|---|"]
     for key in args.only.split(","):

@@ -101,6 +101,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
     do_diff = delta > 0.0
     # linearised hydrostatic density gradient rho0 / c0^2 (s^2/m^2 * kg/m^3)
     diff_h = prm.rho0 / (c0 * c0) if (do_diff and prm.diffusion_hydrostatic) else 0.0
+    dcoef = 2.0 * delta * h * c0  # one division per pair in the diffusion term
     use_L = prm.kernel_gradient
     n_L = L.shape[0] if use_L else 0
     walls = wall.active
@@ -151,7 +152,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
                     psi = rho[i] - rho[j]
                     if diff_h != 0.0:
                         psi -= diff_h * (gravity[0] * x0 + gravity[1] * x1 + gravity[2] * x2)
-                    dr += delta * h * c0 * 2.0 * psi * mj / rho[j] * xg / (r2 + eta2)
+                    dr += dcoef * psi * mj * xg / (rho[j] * (r2 + eta2))
                 s = pi_r + p[j] / (rho[j] * rho[j])
                 if do_av and vx < 0.0:
                     mu = h * vx / (r2 + eta2)
