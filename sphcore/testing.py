@@ -54,27 +54,42 @@ def _toml_value(v) -> str:
     return json.dumps(v) if isinstance(v, (str, bool, int, float, list)) else str(v)
 
 
+def _emit(name: str, table: dict, lines: list) -> None:
+    """Append ``table`` as TOML under the header ``name`` (nested tables and arrays of tables too)."""
+    def is_tables(v):
+        return isinstance(v, list) and v and all(isinstance(e, dict) for e in v)
+
+    if name:
+        lines.append(f"[{name}]")
+    lines += [f"{k} = {_toml_value(v)}" for k, v in table.items() if not isinstance(v, dict) and not is_tables(v)]
+    for k, v in table.items():
+        sub = f"{name}.{k}" if name else k
+        if isinstance(v, dict):
+            _emit(sub, v, lines)
+        elif is_tables(v):
+            for entry in v:
+                lines.append(f"[[{sub}]]")
+                lines += [f"{kk} = {_toml_value(vv)}" for kk, vv in entry.items()]
+
+
 def write_case(directory, text: str = TINY_CASE, plugins=None, tables=None) -> Path:
-    """Write ``directory``/case.toml from ``text`` with ``[plugins] use`` replaced by
-    ``plugins`` and plugin ``tables`` ({table: {key: value}}) appended; returns the directory."""
-    raw = tomllib.loads(textwrap.dedent(text))
-    if plugins is not None:
-        raw.setdefault("plugins", {})["use"] = list(plugins)
-    lines = []
-    for section, body in raw.items():
-        if isinstance(body, list):  # arrays of tables
-            for entry in body:
-                lines.append(f"[[{section}]]")
-                lines += [f"{k} = {_toml_value(v)}" for k, v in entry.items()]
-            continue
-        lines.append(f"[{section}]")
-        lines += [f"{k} = {_toml_value(v)}" for k, v in body.items()]
-    for table, body in (tables or {}).items():
-        lines.append(f"[{table}]")
-        lines += [f"{k} = {_toml_value(v)}" for k, v in body.items()]
+    """Write ``directory``/case.toml and return the directory: ``text`` (dedented) as it is,
+    or, when ``plugins`` or ``tables`` ({table: {key: value}}) are given, ``text`` with
+    ``[plugins] use`` replaced by ``plugins`` and the tables appended (rewritten from its
+    parsed form, so comments are lost)."""
+    text = textwrap.dedent(text)
+    if plugins is not None or tables:
+        raw = tomllib.loads(text)
+        if plugins is not None:
+            raw.setdefault("plugins", {})["use"] = list(plugins)
+        for table, body in (tables or {}).items():
+            raw.setdefault(table, {}).update(body)
+        lines: list = []
+        _emit("", raw, lines)
+        text = "\n".join(lines) + "\n"
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    (directory / "case.toml").write_text("\n".join(lines) + "\n")
+    (directory / "case.toml").write_text(text)
     return directory
 
 

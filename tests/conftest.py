@@ -6,7 +6,6 @@ repository. Plugins are never selected unless a test says so (``[plugins] use = 
 
 from __future__ import annotations
 
-import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +13,7 @@ import pytest
 
 from sphcore import runner
 from sphcore.simulation import Simulation
+from sphcore.testing import write_case  # noqa: F401  (the tests import it from here)
 
 # A small valid 2D case: a 10 x 10 block of fluid (dx = 0.02 m) resting in a 1 m box.
 GOOD_CASE = """
@@ -37,14 +37,6 @@ t_end = 0.002
 [plugins]
 use = []
 """
-
-
-def write_case(directory: Path, text: str) -> Path:
-    """Write ``text`` (dedented) as ``directory/case.toml``; returns the case directory."""
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    (directory / "case.toml").write_text(textwrap.dedent(text))
-    return directory
 
 
 def make_sim(case_dir, overrides=()) -> Simulation:
