@@ -94,6 +94,31 @@ def _fail(path: Path, what: str, err: Exception) -> OutputError:
     return OutputError(f"{path}: cannot {what}: {reason}")
 
 
+def new_dataset(path: Path, title: str, comment: str, attrs: dict) -> netCDF4.Dataset:
+    """A new netCDF file at ``path`` with an unlimited ``time`` dimension and the CF global
+    attributes (Conventions, title, source, history, comment, then ``attrs``); the
+    particle and probe files of a run share it. A failure is an OutputError naming the file."""
+    try:
+        ds = netCDF4.Dataset(path, "w", format=FORMAT)
+    except (OSError, RuntimeError) as err:
+        raise _fail(path, "create the netCDF file", err) from err
+    try:
+        ds.set_auto_maskandscale(False)
+        ds.createDimension("time", None)
+        ds.setncatts({
+            "Conventions": "CF-1.8",
+            "title": title,
+            "source": f"sphcore {sphcore.__version__}",
+            "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} created by sphcore",
+            "comment": comment,
+            **attrs,
+        })
+    except (OSError, RuntimeError) as err:
+        del ds  # not close(): see NetcdfWriter._abandon
+        raise _fail(path, "write the netCDF header", err) from err
+    return ds
+
+
 class NetcdfWriter(ScheduledWriter):
     """Pluggy plugin ``netcdf``: all frames in ``<output_dir>/particles.nc`` on the ``[netcdf]`` schedule."""
 
@@ -172,24 +197,13 @@ class NetcdfWriter(ScheduledWriter):
 
     def _create(self, ctx, st, order) -> None:
         self.path = Path(ctx.output_dir) / FILE_NAME
+        case = ctx.case
+        ds = new_dataset(self.path, f"sphcore particles: {getattr(case, 'name', '')}",
+                         "particles sorted by id; the case's parameters follow as section.key attributes",
+                         case_attributes(getattr(case, "config", {}) or {}))
         try:
-            ds = netCDF4.Dataset(self.path, "w", format=FORMAT)
-        except (OSError, RuntimeError) as err:
-            raise _fail(self.path, "create the netCDF file", err) from err
-        try:
-            ds.set_auto_maskandscale(False)
-            ds.createDimension("time", None)
             ds.createDimension("particle", st.n)
             ds.createDimension("spatial", st.dim)
-            case = ctx.case
-            ds.setncatts({
-                "Conventions": "CF-1.8",
-                "title": f"sphcore particles: {getattr(case, 'name', '')}",
-                "source": f"sphcore {sphcore.__version__}",
-                "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} created by sphcore",
-                "comment": "particles sorted by id; the case's parameters follow as section.key attributes",
-                **case_attributes(getattr(case, "config", {}) or {}),
-            })
             for name, (dims, dtype, attrs) in FRAME_VARS.items():
                 ds.createVariable(name, dtype, dims, fill_value=False).setncatts(attrs)
             for name, (dtype, field, attrs) in STATIC_VARS.items():

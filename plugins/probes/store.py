@@ -11,26 +11,18 @@ names are variables along ``probe``; ``rho0`` and ``g`` are global attributes.
 
 from __future__ import annotations
 
-import datetime as _dt
 import os
 from pathlib import Path
 
 import netCDF4
 import numpy as np
 
-import sphcore
-from sphcore.api import OutputError
-
-from sphcore_plugins.netcdf import FORMAT, _rewrite_first, case_attributes
+from sphcore_plugins.netcdf import _fail, _rewrite_first, case_attributes, new_dataset
 
 FILE_NAME = "probes.nc"
 CSV_NAME = "probes.csv"
 KIND_CODES = {"pressure": 0, "depth": 1}
 MODE_CODES = {"": -1, "wall": 0, "particle": 1}
-
-
-def _fail(path, what, err):
-    return OutputError(f"{path}: cannot {what}: {getattr(err, 'strerror', None) or err}")
 
 
 def _chars(names):
@@ -47,30 +39,19 @@ class ProbeFile:
         self.row = 0
 
     def create(self, probes, dim, rho0, g, config, case_name=""):
+        ds = new_dataset(
+            self.path, f"sphcore probes: {case_name}",
+            "pressure: Shepard kernel interpolation of the fluid within 2h (wall mode: hydrostatic "
+            "extrapolation to the sensor); depth: first height above the floor point where the "
+            "fluid fraction drops below 0.5; see sphcore_plugins.probes.sampling",
+            {"rho0": np.float64(rho0), "g": np.float64(g), **case_attributes(config or {})})
         try:
-            ds = netCDF4.Dataset(self.path, "w", format=FORMAT)
-        except (OSError, RuntimeError) as err:
-            raise _fail(self.path, "create the netCDF file", err) from err
-        try:
-            ds.set_auto_maskandscale(False)
-            ds.createDimension("time", None)
             ds.createDimension("probe", len(probes))
             ds.createDimension("spatial", dim)
             names, width = _chars([p.name for p in probes])
             refs, rwidth = _chars([p.reference or "" for p in probes])
             ds.createDimension("name_strlen", width)
             ds.createDimension("reference_strlen", rwidth)
-            ds.setncatts({
-                "Conventions": "CF-1.8",
-                "title": f"sphcore probes: {case_name}",
-                "source": f"sphcore {sphcore.__version__}",
-                "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} created by sphcore",
-                "comment": "pressure: Shepard kernel interpolation of the fluid within 2h (wall mode: hydrostatic "
-                           "extrapolation to the sensor); depth: first height above the floor point where the "
-                           "fluid fraction drops below 0.5; see sphcore_plugins.probes.sampling",
-                "rho0": np.float64(rho0), "g": np.float64(g),
-                **case_attributes(config or {}),
-            })
             v = ds.createVariable("time", "f8", ("time",), fill_value=False)
             v.setncatts({"units": "s", "standard_name": "time", "long_name": "simulated time since gate release"})
             ds.createVariable("step", "i8", ("time",), fill_value=False).setncatts(
