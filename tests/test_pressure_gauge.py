@@ -35,6 +35,6 @@ def test_gauge_reads_the_initial_hydrostatic_tank_as_exact(tmp_path, radius):
     s = run_case(tmp_path, TANK.format(radius=radius))
     g = s["pressure_gauge"]
     assert s["status"] == "completed"
-    assert g["pressure_max_layer_err"] < 1e-3
+    assert g["pressure_max_layer_err"] < 1e-9  # round-off: 1e-12 measured
     assert abs(g["surface_drift_m"]) < 1e-9
-    assert g["max_displacement_m"] < 1e-6
+    assert g["max_displacement_m"] < 1e-12
