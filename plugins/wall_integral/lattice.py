@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphcore.api import kernel_f, kernel_w
+from sphcore.api import kernel_f, kernel_w, particle_distance
 
 from .share import wall_terms_at
 
@@ -120,14 +120,6 @@ def _interp(nodes, tab, m, d0, d1, d2, col):
     return v
 
 
-@njit(cache=True, inline="always")
-def _dist(normals, offsets, k, pos, i, dim):
-    d = -offsets[k]
-    for a in range(dim):
-        d += normals[k, a] * pos[i, a]
-    return d
-
-
 @njit(cache=True, parallel=True)
 def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad, hydro,
                            fill):
@@ -147,7 +139,7 @@ def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, suppo
         cnt = 0
         k0 = k1 = k2 = -1
         for k in range(nk):
-            if _dist(normals, offsets, k, pos, i, dim) < support:
+            if particle_distance(normals, offsets, k, pos, i) < support:
                 if cnt == 0:
                     k0 = k
                 elif cnt == 1:
@@ -170,9 +162,9 @@ def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, suppo
             perp = abs(c01) <= PERP_TOL and abs(c02) <= PERP_TOL and abs(c12) <= PERP_TOL
         if perp:
             tab = tab1 if cnt == 1 else (tab2 if cnt == 2 else tab3)
-            d0 = _dist(normals, offsets, k0, pos, i, dim)
-            d1 = _dist(normals, offsets, k1, pos, i, dim) if cnt > 1 else 0.0
-            d2 = _dist(normals, offsets, k2, pos, i, dim) if cnt > 2 else 0.0
+            d0 = particle_distance(normals, offsets, k0, pos, i)
+            d1 = particle_distance(normals, offsets, k1, pos, i) if cnt > 1 else 0.0
+            d2 = particle_distance(normals, offsets, k2, pos, i) if cnt > 2 else 0.0
             f = _interp(nodes, tab, cnt, d0, d1, d2, cnt) / lam
             fill[i] += _interp(nodes, tab, cnt, d0, d1, d2, cnt + 1)
             # the first moment's error lies along the walls: g minus its parts along every normal
@@ -196,7 +188,7 @@ def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, suppo
         else:
             gam = full
             for k in range(nk):
-                d = _dist(normals, offsets, k, pos, i, dim)
+                d = particle_distance(normals, offsets, k, pos, i)
                 if d < support:
                     e = _interp(nodes, tab1, 1, d, 0.0, 0.0, 0)
                     f = _interp(nodes, tab1, 1, d, 0.0, 0.0, 1) / lam
