@@ -57,18 +57,6 @@ from sphcore.api import particle_distance, plane_distance
 TOL_REL = 1e-9
 
 
-@numba.njit(cache=True, inline="always")
-def _distance(normals, offsets, k, x, i, dim):
-    """Signed distance d = n_k . x_i - offset_k (Eq. 4, m)."""
-    return particle_distance(normals, offsets, k, x, i)
-
-
-@numba.njit(cache=True, inline="always")
-def _distance_to(normals, offsets, k, a0, a1, a2, dim):
-    """Signed distance of the point (a0, a1, a2) to plane k."""
-    return plane_distance(normals, offsets, k, a0, a1, a2)
-
-
 @numba.njit(cache=True)
 def _limit(r):
     """The collision threshold r - tol (m): a plane collides when d < _limit(r)."""
@@ -106,9 +94,9 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
             fbest = np.inf
             dbest = 0.0
             for k in range(nplanes):
-                db = _distance(normals, offsets, k, pos, i, dim)
+                db = particle_distance(normals, offsets, k, pos, i)
                 if db < lim:
-                    da = _distance_to(normals, offsets, k, a0, a1, a2, dim)
+                    da = plane_distance(normals, offsets, k, a0, a1, a2)
                     # d_A <= r: touching at the start (rest, C1 = C0, parallel motion): f = 0
                     # otherwise d_A > r > d_B, so the denominator is positive
                     f = 0.0 if da <= r else (da - r) / (da - db)
@@ -160,7 +148,7 @@ def min_clearance(pos, radius, normals, offsets):
     for i in numba.prange(n):
         c = np.inf
         for k in range(normals.shape[0]):
-            c = min(c, _distance(normals, offsets, k, pos, i, dim) - radius[i])
+            c = min(c, particle_distance(normals, offsets, k, pos, i) - radius[i])
         out[i] = c
     return out
 
@@ -173,7 +161,7 @@ def outside_mask(pos, radius, normals, offsets):
     for i in numba.prange(n):
         lim = _limit(radius[i])
         for k in range(normals.shape[0]):
-            if _distance(normals, offsets, k, pos, i, dim) < lim:
+            if particle_distance(normals, offsets, k, pos, i) < lim:
                 out[i] = True
     return out
 
