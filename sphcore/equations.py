@@ -38,8 +38,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from .kernels import kernel_f, kernel_w
-from .neighbours import cell_of, cell_range
+from .corrections import _corrected
+from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
 
 
 class Fields(NamedTuple):
@@ -80,8 +80,17 @@ class WallTerms(NamedTuple):
 
 
 @njit(cache=True, parallel=True)
-def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
+def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
     """Accelerations acc (n_dest, dim) in m/s^2 and density rates drho (n_dest,) in kg/m^3/s.
+
+    Every interacting pair is evaluated once and applied to both particles (Newton's third
+    law: the pair forces are equal and opposite to round-off), walking each occupied cell
+    and its forward neighbours (:mod:`sphcore.neighbours`); slabs of the same parity run in
+    parallel without touching the same particle, so the result does not depend on the
+    number of threads. A pair of two plugin sources (ghosts) is skipped, a pair of a fluid
+    particle and a source acts on the fluid particle only. ``work`` (n_sources, 6) is
+    scratch (the near-wall sums of the wall completion, p/rho^2 and 1/rho); ``nth``: numba's thread count (only the
+    balance between threads depends on it).
 
     Terms whose coefficient is zero are skipped, so a case without viscosity or density
     diffusion computes none. ``prm.modified_pressure``: gravity acts as g (1 - rho0/rho_i)
@@ -90,47 +99,95 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
     still conserved); sources beyond ``L.shape[0]`` use the identity. ``wall``: see the
     module docstring.
     """
+    dim = src.pos.shape[1]
+    rho, p = src.rho, src.p
+    for i in prange(rho.shape[0]):
+        if i < n_dest:
+            for d in range(dim):
+                acc[i, d] = 0.0
+            drho[i] = 0.0
+        for d in range(4):
+            work[i, d] = 0.0
+        work[i, 4] = p[i] / (rho[i] * rho[i])  # per particle, not per pair: divisions are slow
+        work[i, 5] = 1.0 / rho[i]
+    slab_start = grid.slab_start
+    nslab = slab_start.shape[0] - 1
+    # prange gives each thread one contiguous block of tasks; the slabs differ in size
+    # (water on a floor: the bottom layers hold most particles), so thread k's block holds
+    # the slabs k, k + nth, k + 2 nth, ... Which thread runs a slab does not change the result.
+    for phase in range(2):
+        ntask = (nslab - phase + 1) // 2
+        block = (ntask + nth - 1) // nth
+        for t in prange(nth * block):
+            u = (t % block) * nth + t // block
+            if u >= ntask:
+                continue
+            s = 2 * u + phase
+            for c in range(slab_start[s], slab_start[s + 1]):
+                _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work)
+    for i in prange(n_dest):
+        _finish(i, dim, src, prm, wall, acc, drho, work)
+
+
+@njit(cache=True)
+def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work):
+    """The pairs of occupied cell c with itself and its forward neighbours, both ways."""
     pos, vel, rho, p, m = src
     dim = pos.shape[1]
     h, c0 = prm.h, prm.c0
     alpha, beta, nu, delta, eta2 = prm.alpha, prm.beta, prm.nu, prm.delta, prm.eta2
     gravity = prm.gravity
+    kid = prm.kernel_id
+    inv_h = 1.0 / h
+    fscale = kernel_f_scale(kid, h, dim)
     r2max = prm.support * prm.support
     do_av = alpha > 0.0 or beta > 0.0
     do_lam = nu > 0.0
     do_diff = delta > 0.0
+    any_visc = do_av or do_lam or do_diff
     # linearised hydrostatic density gradient rho0 / c0^2 (s^2/m^2 * kg/m^3)
     diff_h = prm.rho0 / (c0 * c0) if (do_diff and prm.diffusion_hydrostatic) else 0.0
-    dcoef = 2.0 * delta * h * c0  # one division per pair in the diffusion term
+    dcoef = 2.0 * delta * h * c0
     use_L = prm.kernel_gradient
     n_L = L.shape[0] if use_L else 0
     walls = wall.active
-    for i in prange(n_dest):
-        cx, cy, cz = cell_of(grid, pos, i)
+    order, cell_start, nbr = grid.order, grid.cell_start, grid.nbr
+    centre = 3 ** dim // 2
+    for k in range(cell_start[c], cell_start[c + 1]):
+        i = order[k]
+        di = i < n_dest
         a0 = 0.0
         a1 = 0.0
         a2 = 0.0
         dr = 0.0
-        b0 = 0.0  # b = sum_j V_j grad_i W_ij (x_j - x_i) . g, for the wall completion
         gam = 0.0  # sum_j V_j W_ij, the particle's own neighbour sum (wall completion)
+        b0 = 0.0  # b = sum_j V_j grad_i W_ij (x_j - x_i) . g, for the wall completion
         b1 = 0.0
         b2 = 0.0
-        pi_r = p[i] / (rho[i] * rho[i])
-        near = walls and wall.share[i] > 0.0  # within the support of a wall: complete the sums
-        for q in range(3 ** dim):
-            k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
-            for k in range(k0, k1):
-                j = grid.order[k]
-                if j == i:
-                    continue
+        rho_i = rho[i]
+        m_i = m[i]
+        pi_r = work[i, 4]
+        irho_i = work[i, 5]
+        near_i = walls and di and wall.share[i] > 0.0
+        for q in range(centre, 3 ** dim):
+            c2 = nbr[c, q]
+            if c2 < 0:
+                continue
+            k0 = k + 1 if q == centre else cell_start[c2]
+            for k2 in range(k0, cell_start[c2 + 1]):
+                j = order[k2]
+                dj = j < n_dest
+                if not (di or dj):
+                    continue  # two sources (ghosts) do not interact
                 x0 = pos[i, 0] - pos[j, 0]
                 x1 = pos[i, 1] - pos[j, 1]
                 x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
                 r2 = x0 * x0 + x1 * x1 + x2 * x2
                 if r2 >= r2max:
                     continue
-                f = kernel_f(prm.kernel_id, np.sqrt(r2), h, dim)
-                g0 = f * x0
+                r = np.sqrt(r2)
+                f = fscale * kernel_f_of_q(kid, r * inv_h)
+                g0 = f * x0  # grad_i W_ij = -grad_j W_ji
                 g1 = f * x1
                 g2 = f * x2
                 if use_L:
@@ -138,42 +195,98 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho):
                 v0 = vel[i, 0] - vel[j, 0]
                 v1 = vel[i, 1] - vel[j, 1]
                 v2 = vel[i, 2] - vel[j, 2] if dim == 3 else 0.0
-                vx = v0 * x0 + v1 * x1 + v2 * x2
-                xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
-                mj = m[j]
-                dr += mj * (v0 * g0 + v1 * g1 + v2 * g2)
-                if near:
-                    gam += mj / rho[j] * kernel_w(prm.kernel_id, np.sqrt(r2), h, dim)
-                    vr = -mj / rho[j] * (x0 * gravity[0] + x1 * gravity[1] + x2 * gravity[2])
-                    b0 += vr * g0
-                    b1 += vr * g1
-                    b2 += vr * g2
-                if do_diff:
-                    psi = rho[i] - rho[j]
-                    if diff_h != 0.0:
-                        psi -= diff_h * (gravity[0] * x0 + gravity[1] * x1 + gravity[2] * x2)
-                    dr += dcoef * psi * mj * xg / (rho[j] * (r2 + eta2))
-                s = pi_r + p[j] / (rho[j] * rho[j])
-                if do_av and vx < 0.0:
-                    mu = h * vx / (r2 + eta2)
-                    s += (-alpha * c0 * mu + beta * mu * mu) / (0.5 * (rho[i] + rho[j]))
-                a0 -= mj * s * g0
-                a1 -= mj * s * g1
-                a2 -= mj * s * g2
-                if do_lam:
-                    lam = mj * 4.0 * nu / (rho[i] + rho[j]) * xg / (r2 + eta2)
-                    a0 += lam * v0
-                    a1 += lam * v1
-                    a2 += lam * v2
-        if near:
-            a0, a1, a2, dr = _complete_at_wall(wall, i, dim, vel, rho[i], p[i], prm.rho_ref, prm.moment_norm, gravity,
-                                               a0, a1, a2, dr, b0, b1, b2, gam)
-        gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
-        acc[i, 0] = gscale * gravity[0] + a0
-        acc[i, 1] = gscale * gravity[1] + a1
-        if dim == 3:
-            acc[i, 2] = gscale * gravity[2] + a2
-        drho[i] = dr
+                m_j = m[j]
+                vg = v0 * g0 + v1 * g1 + v2 * g2  # v_ij . grad_i W_ij = v_ji . grad_j W_ji
+                dr_i = m_j * vg
+                dr_j = m_i * vg
+                s = pi_r + work[j, 4]
+                e0 = 0.0
+                e1 = 0.0
+                e2 = 0.0
+                if any_visc:
+                    xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
+                    ir2 = 1.0 / (r2 + eta2)
+                    rho_j = rho[j]
+                    if do_diff:
+                        psi = rho_i - rho_j  # psi_ji = -psi_ij
+                        if diff_h != 0.0:
+                            psi -= diff_h * (gravity[0] * x0 + gravity[1] * x1 + gravity[2] * x2)
+                        cd = dcoef * psi * xg * ir2
+                        dr_i += cd * m_j * work[j, 5]
+                        dr_j -= cd * m_i * irho_i
+                    if do_av:
+                        # approaching pairs only (v_ij . x_ij < 0); min() rather than a branch,
+                        # which the CPU would mispredict for half the pairs of a flow
+                        mu = h * min(v0 * x0 + v1 * x1 + v2 * x2, 0.0) * ir2
+                        s += (-alpha * c0 * mu + beta * mu * mu) * 2.0 / (rho_i + rho_j)
+                    if do_lam:
+                        lam = 4.0 * nu / (rho_i + rho_j) * xg * ir2
+                        e0 = -lam * v0
+                        e1 = -lam * v1
+                        e2 = -lam * v2
+                # pressure, artificial and laminar viscosity: -m_j e on i, +m_i e on j
+                e0 += s * g0
+                e1 += s * g1
+                e2 += s * g2
+                near_j = walls and dj and wall.share[j] > 0.0
+                w = 0.0
+                gx = 0.0
+                if near_i or near_j:
+                    w = kernel_w(kid, r, h, dim)
+                    gx = -(x0 * gravity[0] + x1 * gravity[1] + x2 * gravity[2])
+                if di:
+                    a0 -= m_j * e0
+                    a1 -= m_j * e1
+                    a2 -= m_j * e2
+                    dr += dr_i
+                    if near_i:
+                        vj = m_j * work[j, 5]
+                        gam += vj * w
+                        b0 += vj * gx * g0
+                        b1 += vj * gx * g1
+                        b2 += vj * gx * g2
+                if dj:
+                    acc[j, 0] += m_i * e0
+                    acc[j, 1] += m_i * e1
+                    if dim == 3:
+                        acc[j, 2] += m_i * e2
+                    drho[j] += dr_j
+                    if near_j:
+                        vi = m_i * irho_i
+                        work[j, 0] += vi * w
+                        work[j, 1] += vi * gx * g0
+                        work[j, 2] += vi * gx * g1
+                        work[j, 3] += vi * gx * g2
+        if di:
+            acc[i, 0] += a0
+            acc[i, 1] += a1
+            if dim == 3:
+                acc[i, 2] += a2
+            drho[i] += dr
+            if near_i:
+                work[i, 0] += gam
+                work[i, 1] += b0
+                work[i, 2] += b1
+                work[i, 3] += b2
+
+
+@njit(cache=True, inline="always")
+def _finish(i, dim, src, prm, wall, acc, drho, work):
+    """Gravity and the wall completion of particle i, after all pairs."""
+    rho, gravity = src.rho, prm.gravity
+    a0 = acc[i, 0]
+    a1 = acc[i, 1]
+    a2 = acc[i, 2] if dim == 3 else 0.0
+    dr = drho[i]
+    if wall.active and wall.share[i] > 0.0:
+        a0, a1, a2, dr = _complete_at_wall(wall, i, dim, src.vel, rho[i], src.p[i], prm.rho_ref, prm.moment_norm,
+                                           gravity, a0, a1, a2, dr, work[i, 1], work[i, 2], work[i, 3], work[i, 0])
+    gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
+    acc[i, 0] = gscale * gravity[0] + a0
+    acc[i, 1] = gscale * gravity[1] + a1
+    if dim == 3:
+        acc[i, 2] = gscale * gravity[2] + a2
+    drho[i] = dr
 
 
 @njit(cache=True, inline="always")
@@ -245,115 +358,6 @@ def _project(q, i, dim, v0, v1, v2):
     return (q[i, 0, 0] * v0 + q[i, 0, 1] * v1 + q[i, 0, 2] * v2,
             q[i, 1, 0] * v0 + q[i, 1, 1] * v1 + q[i, 1, 2] * v2,
             q[i, 2, 0] * v0 + q[i, 2, 1] * v1 + q[i, 2, 2] * v2)
-
-
-@njit(cache=True)
-def _corrected(L, n_L, i, j, g0, g1, g2):
-    """(L_i + L_j)/2 applied to the gradient; L is the identity for rows >= n_L (ghosts)."""
-    a0, a1, a2 = _apply(L, n_L, i, g0, g1, g2)
-    b0, b1, b2 = _apply(L, n_L, j, g0, g1, g2)
-    return 0.5 * (a0 + b0), 0.5 * (a1 + b1), 0.5 * (a2 + b2)
-
-
-@njit(cache=True)
-def _apply(L, n_L, row, g0, g1, g2):
-    # separate calls for i and j: the parfor index and j have different integer types,
-    # and a conditional expression over both would unify them to float64
-    if row >= n_L:
-        return g0, g1, g2
-    return (L[row, 0, 0] * g0 + L[row, 0, 1] * g1 + L[row, 0, 2] * g2,
-            L[row, 1, 0] * g0 + L[row, 1, 1] * g1 + L[row, 1, 2] * g2,
-            L[row, 2, 0] * g0 + L[row, 2, 1] * g1 + L[row, 2, 2] * g2)
-
-
-@njit(cache=True, parallel=True)
-def neighbour_sums(n_dest, src, grid, prm, want_L, L, want_shepard, shepard):
-    """Per-particle kernel sums over the neighbours (self included where it contributes).
-
-    - L (n_dest, 3, 3): the Bonet & Lok (1999) correction matrix
-      L_i = [sum_j V_j (x_j - x_i) (x) grad_i W_ij]^-1 (identity where the sum is singular);
-    - shepard (n_dest,): the Shepard-filtered density
-      rho_i = sum_j m_j W_ij / sum_j V_j W_ij (Chen et al. 1999, CSPH zeroth order).
-    """
-    pos, rho, m = src.pos, src.rho, src.m
-    dim = pos.shape[1]
-    h, kernel_id = prm.h, prm.kernel_id
-    r2max = prm.support * prm.support
-    for i in prange(n_dest):
-        cx, cy, cz = cell_of(grid, pos, i)
-        if want_L:
-            for a in range(3):
-                for b in range(3):
-                    L[i, a, b] = 0.0  # accumulates M_i, inverted in place below
-        num = 0.0
-        den = 0.0
-        for q in range(3 ** dim):
-            k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
-            for k in range(k0, k1):
-                j = grid.order[k]
-                x0 = pos[i, 0] - pos[j, 0]
-                x1 = pos[i, 1] - pos[j, 1]
-                x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
-                r2 = x0 * x0 + x1 * x1 + x2 * x2
-                if r2 >= r2max:
-                    continue
-                r = np.sqrt(r2)
-                vj = m[j] / rho[j]
-                if want_shepard:
-                    w = kernel_w(kernel_id, r, h, dim)
-                    num += m[j] * w
-                    den += vj * w
-                if want_L and j != i:
-                    # M_ab += V_j (x_j - x_i)_a (grad_i W_ij)_b, grad_i W_ij = f x_ij
-                    coef = -vj * kernel_f(kernel_id, r, h, dim)
-                    L[i, 0, 0] += coef * x0 * x0
-                    L[i, 0, 1] += coef * x0 * x1
-                    L[i, 1, 0] += coef * x1 * x0
-                    L[i, 1, 1] += coef * x1 * x1
-                    if dim == 3:
-                        L[i, 0, 2] += coef * x0 * x2
-                        L[i, 1, 2] += coef * x1 * x2
-                        L[i, 2, 0] += coef * x2 * x0
-                        L[i, 2, 1] += coef * x2 * x1
-                        L[i, 2, 2] += coef * x2 * x2
-        if want_shepard:
-            shepard[i] = num / den if den > 0.0 else rho[i]
-        if want_L:
-            _invert_in_place(L, i, dim)
-
-
-@njit(cache=True, inline="always")
-def _invert_in_place(L, i, dim):
-    """L[i] <- inverse of L[i] (2x2 or 3x3 block); identity where it is near singular
-    (isolated particles: keep the plain gradient)."""
-    m00, m01, m02 = L[i, 0, 0], L[i, 0, 1], L[i, 0, 2]
-    m10, m11, m12 = L[i, 1, 0], L[i, 1, 1], L[i, 1, 2]
-    m20, m21, m22 = L[i, 2, 0], L[i, 2, 1], L[i, 2, 2]
-    for a in range(3):
-        for b in range(3):
-            L[i, a, b] = 1.0 if a == b else 0.0
-    if dim == 2:
-        det = m00 * m11 - m01 * m10
-        if abs(det) > 1e-3:
-            L[i, 0, 0] = m11 / det
-            L[i, 0, 1] = -m01 / det
-            L[i, 1, 0] = -m10 / det
-            L[i, 1, 1] = m00 / det
-        return
-    c00 = m11 * m22 - m12 * m21
-    c01 = m12 * m20 - m10 * m22
-    c02 = m10 * m21 - m11 * m20
-    det = m00 * c00 + m01 * c01 + m02 * c02
-    if abs(det) > 1e-3:
-        L[i, 0, 0] = c00 / det
-        L[i, 1, 0] = c01 / det
-        L[i, 2, 0] = c02 / det
-        L[i, 0, 1] = (m02 * m21 - m01 * m22) / det
-        L[i, 1, 1] = (m00 * m22 - m02 * m20) / det
-        L[i, 2, 1] = (m01 * m20 - m00 * m21) / det
-        L[i, 0, 2] = (m01 * m12 - m02 * m11) / det
-        L[i, 1, 2] = (m02 * m10 - m00 * m12) / det
-        L[i, 2, 2] = (m00 * m11 - m01 * m10) / det
 
 
 @njit(cache=True)

@@ -11,10 +11,12 @@ Only what the case models runs; ``ctx.counters`` records which kernels did.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from . import eos
-from .equations import Fields, WallTerms, neighbour_sums, sph_rates, uniform_acceleration
+from .corrections import neighbour_sums
+from .equations import Fields, WallTerms, sph_rates, uniform_acceleration
 from .errors import Instability
 from .neighbours import CellGrid
 
@@ -51,15 +53,16 @@ class PressureField:
 
 
 class Forces:
-    """Evaluates rates for one run. ``hook`` is the plugin manager's hook relay."""
+    """Evaluates rates for one run. ``hook``: the run's :class:`sphcore.pluginhost.HookRelay`."""
 
     def __init__(self, ctx, hook, pressure: PressureField):
         self.ctx, self.hook, self.pressure = ctx, hook, pressure
-        self.wants_walls = bool(hook.sph_wall_terms.get_hookimpls())
+        self.wants_walls = "sph_wall_terms" in hook.implemented
         self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
         self._L = np.zeros((1, 3, 3))
         self._grid = None
         self._shepard = np.zeros(1)
+        self._work = np.zeros((0, 6))
         self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0),
                                False)
 
@@ -90,7 +93,7 @@ class Forces:
         except OverflowError as e:
             far = int(np.argmax(np.abs(pos - np.median(pos, axis=0)).sum(axis=1)))
             pid = int(ctx.state.id[far]) if far < ctx.state.n else -1
-            raise Instability(ctx.step, ctx.t, pid, f"particles spread far apart ({e})") from None
+            raise Instability(ctx.step, ctx.t, pid, f"neighbour search failed: {e}") from None
         if count:
             ctx.counters["neighbour_search"] += 1
         return grid
@@ -113,10 +116,12 @@ class Forces:
         self.ctx.counters["wall_terms"] += 1
         return w
 
-    def _buffers(self, n):
+    def _buffers(self, n, n_src):
         prm = self.ctx.params
         if prm.kernel_gradient and self._L.shape[0] != n:
             self._L = np.zeros((n, 3, 3))
+        if self._work.shape[0] < n_src:
+            self._work = np.zeros((n_src + n_src // 4, 6))
 
     # -- the evaluation ---------------------------------------------------------------
 
@@ -132,11 +137,12 @@ class Forces:
             src = self.sources()
             grid = self.grid(src.pos)
             wall = self.wall_terms()
-            self._buffers(st.n)
+            self._buffers(st.n, src.pos.shape[0])
             if prm.kernel_gradient:
                 neighbour_sums(st.n, src, grid.view, prm, True, self._L, False, self._shepard)
                 counters["kernel_gradient_correction"] += 1
-            sph_rates(st.n, src, grid.view, prm, self._L, wall, acc, drho)
+            sph_rates(st.n, src, grid.view, prm, self._L, wall, acc, drho, self._work[:src.pos.shape[0]],
+                      numba.get_num_threads())
             counters["continuity"] += 1
             counters["momentum"] += 1
             if prm.alpha > 0 or prm.beta > 0:

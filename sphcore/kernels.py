@@ -59,6 +59,28 @@ def kernel_f(kernel_id, r, h, dim):
     return 0.0
 
 
+@njit(cache=True, inline="always")
+def kernel_f_scale(kernel_id, h, dim):
+    """The factor sigma / h^(dim+2) of F, so that F(r) = kernel_f_scale * kernel_f_of_q(q),
+    q = r / h: loops over pairs compute it once."""
+    return _sigma(kernel_id, dim) / h ** (dim + 2)
+
+
+@njit(cache=True, inline="always")
+def kernel_f_of_q(kernel_id, q):
+    """F in units of sigma / h^(dim+2) as a function of q = r / h (no division)."""
+    if kernel_id == CUBIC_SPLINE:
+        if q < 1.0:
+            return -3.0 + 2.25 * q
+        if q < 2.0:
+            return -0.75 * (2.0 - q) ** 2 / q
+        return 0.0
+    if q < 2.0:
+        t = 1.0 - 0.5 * q
+        return -5.0 * t * t * t
+    return 0.0
+
+
 def lattice_moment(kernel_id: int, h: float, dx: float, dim: int) -> float:
     """Lattice normalisation lambda of the SPH first moment: -(1/dim) sum_k dx^dim x_k . grad W(x_k).
 

@@ -1,10 +1,30 @@
-"""Cell-linked-list neighbour search.
+"""Neighbour search on sorted cell keys: memory follows the particles, not the box.
 
 Particles are binned into square/cubic cells of side ``cell_size`` (the kernel support,
-2h) and counting-sorted by cell, giving ``order`` (particle indices grouped by cell) and
-``cell_start`` (CSR offsets: the particles of cell c are ``order[cell_start[c]:cell_start[c+1]]``).
-A particle's neighbours within the support lie in its own and the adjacent cells. In 2D
-the grid has one layer in z, so the same code serves both dimensions.
+2h). Each particle gets the integer key of its cell on the grid over the particles'
+bounding box, with the axis that has the most cells as the most significant digit (the
+"major" axis), then the others. A stable LSD radix sort of the keys gives ``order``
+(particle indices grouped by cell, in key order); only the cells that hold particles are
+kept (``cell_start``: CSR offsets, cell c holds ``order[cell_start[c]:cell_start[c+1]]``),
+so a few particles far from the rest cost a few cells, not a grid over the whole box.
+For every occupied cell the table ``nbr`` (m, 3**dim) lists its occupied neighbour cells
+(-1: empty or outside), found once per build by binary search over the keys; every kernel
+walks the neighbours through it:
+
+    c = cell_of(grid, i)
+    for q in range(3 ** dim):
+        k0, k1 = cell_range(grid, c, q)
+        for k in range(k0, k1):
+            j = grid.order[k]
+
+Stencil index q = sum over axes (major first) of (offset + 1) 3^(dim-1-a); q = centre
+(4 in 2D, 13 in 3D) is the cell itself, q > centre are the "forward" neighbours, so that
+walking the cell and its forward neighbours visits every pair of cells once (the pair
+loop of :func:`sphcore.equations.sph_rates`). ``slab_start`` cuts the occupied cells
+into slabs of whole layers along the major axis, balanced by particle count; a cell's forward neighbours lie in its
+own layer or the next, so slabs of the same parity never touch the same particles: the
+pair loop runs the even slabs in parallel, then the odd ones, race-free, and the order
+of the additions to each particle depends on the slabs alone, not on the thread count.
 """
 
 from __future__ import annotations
@@ -12,26 +32,33 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+MAX_AXIS_CELLS = 1 << 21  # cells per axis; the keys of three axes then fit in an int64
+MAX_SLABS = 64  # slabs of the pair loop (two phases of up to 32 parallel tasks)
 
 
 class Grid(NamedTuple):
-    """The arrays a kernel needs to walk neighbours: one numba argument instead of five.
+    """The arrays a kernel needs to walk neighbours: one numba argument.
 
-    ``order`` (n,) particle indices grouped by cell, ``cell_start`` (ncells + 1,) CSR
-    offsets, ``lo`` (3,) lower corner (m), ``cell_size`` (m), ``ncell`` (3,) cells per axis.
+    ``order`` (n,) particle indices grouped by cell; ``cell_start`` (m + 1,) CSR offsets of
+    the m occupied cells; ``pcell`` (n,) the occupied cell of each particle; ``nbr``
+    (m, 3**dim) occupied neighbour cells (-1: none); ``slab_start`` (nslab + 1,) cell
+    offsets of the slabs of the pair loop; ``lo`` (3,) lower corner (m) and ``cell_size`` (m).
     """
 
     order: np.ndarray
     cell_start: np.ndarray
+    pcell: np.ndarray
+    nbr: np.ndarray
+    slab_start: np.ndarray
     lo: np.ndarray
     cell_size: float
-    ncell: np.ndarray
 
 
 @njit(cache=True)
 def bounding_box(pos):
-    """Lower and upper corner (3,) of the points; z is 0 in 2D."""
+    """Lower and upper corner (3,) of the points; z is 0 in 2D; NaN where a coordinate is."""
     n, dim = pos.shape
     lo = np.zeros(3)
     hi = np.zeros(3)
@@ -45,135 +72,270 @@ def bounding_box(pos):
                 lo[d] = x
             if x > hi[d]:
                 hi[d] = x
+            if x != x:  # NaN: the box becomes NaN too (and stays: comparisons are false)
+                lo[d] = x
     return lo, hi
 
 
 @njit(cache=True, inline="always")
-def cell_coords(pos, i, lo, cell_size, ncell):
-    """Integer cell coordinates of particle i (clamped into the grid)."""
-    dim = pos.shape[1]
-    cx = min(int((pos[i, 0] - lo[0]) / cell_size), ncell[0] - 1)
-    cy = min(int((pos[i, 1] - lo[1]) / cell_size), ncell[1] - 1)
-    cz = 0
-    if dim == 3:
-        cz = min(int((pos[i, 2] - lo[2]) / cell_size), ncell[2] - 1)
-    return cx, cy, cz
-
-
-@njit(cache=True)
-def neighbour_cell(cx, cy, cz, q, ncell, dim):
-    """Flat index of the q-th cell around (cx, cy, cz), or -1 when it lies outside the grid.
-
-    q runs over ``range(3 ** dim)``: the 9 cells of the particle's layer in 2D, the 27 of
-    the three layers in 3D. Kernels walk a particle's neighbours as
-    ``for q in range(3 ** dim): c = neighbour_cell(...)``, then the particles
-    ``order[cell_start[c]:cell_start[c + 1]]``."""
-    if dim == 2:
-        q += 9  # the middle layer: z = cz
-    z = cz + q // 9 - 1
-    if z < 0 or z >= ncell[2]:
-        return -1
-    y = cy + (q // 3) % 3 - 1
-    if y < 0 or y >= ncell[1]:
-        return -1
-    x = cx + q % 3 - 1
-    if x < 0 or x >= ncell[0]:
-        return -1
-    return x + ncell[0] * (y + ncell[1] * z)
+def cell_of(grid, i):
+    """The occupied cell of particle i (an index into ``grid.nbr``)."""
+    return grid.pcell[i]
 
 
 @njit(cache=True, inline="always")
-def cell_of(grid, pos, i):
-    """Cell coordinates (cx, cy, cz) of particle i in ``grid``."""
-    return cell_coords(pos, i, grid.lo, grid.cell_size, grid.ncell)
-
-
-@njit(cache=True, inline="always")
-def cell_range(grid, cx, cy, cz, q, dim):
-    """(k0, k1): the particles of the q-th cell around (cx, cy, cz) are
-    ``grid.order[k0:k1]``; an empty range for a cell outside the grid.
-
-    Every kernel walks the neighbours of particle i the same way::
-
-        cx, cy, cz = cell_of(grid, pos, i)
-        for q in range(3 ** dim):
-            k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
-            for k in range(k0, k1):
-                j = grid.order[k]
-    """
-    c = neighbour_cell(cx, cy, cz, q, grid.ncell, dim)
-    if c < 0:
+def cell_range(grid, c, q):
+    """(k0, k1): the particles of the q-th neighbour cell of occupied cell c are
+    ``grid.order[k0:k1]``; an empty range where that cell holds none."""
+    c2 = grid.nbr[c, q]
+    if c2 < 0:
         return 0, 0
-    return grid.cell_start[c], grid.cell_start[c + 1]
+    return grid.cell_start[c2], grid.cell_start[c2 + 1]
 
 
 @njit(cache=True)
-def _cell_ids(pos, lo, cell_size, ncell, out):
-    for i in range(pos.shape[0]):
-        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
-        out[i] = cx + ncell[0] * (cy + ncell[1] * cz)
+def _keys(pos, lo, cell_size, axes, ncell, key):
+    """key[i] = mixed-radix cell index, axes[0] (major) most significant."""
+    n, dim = pos.shape
+    for i in range(n):
+        k = 0
+        for a in range(dim):
+            ax = axes[a]
+            c = min(int((pos[i, ax] - lo[ax]) / cell_size), ncell[a] - 1)
+            k = k * ncell[a] + c
+        key[i] = k
 
 
 @njit(cache=True)
-def _counting_sort(cell, ncells, order, cell_start, fill):
-    """order <- particle indices grouped by cell; cell_start (ncells + 1) CSR offsets; ``fill``
-    (>= ncells) is scratch."""
-    cell_start[:] = 0
-    for i in range(cell.shape[0]):
-        cell_start[cell[i] + 1] += 1
-    for c in range(ncells):
-        cell_start[c + 1] += cell_start[c]
-    for c in range(ncells):
-        fill[c] = cell_start[c]
-    for i in range(cell.shape[0]):  # stable: keeps the current order inside a cell
-        c = cell[i]
-        order[fill[c]] = i
-        fill[c] += 1
+def _radix_sort(key, nbits, order, tmp, count):
+    """order <- the stable permutation sorting ``key`` (non-negative, < 2**nbits): LSD radix
+    sort, passes of at most 16 bits; ``tmp`` (n,) and ``count`` (>= 2**16 + 1) scratch."""
+    n = key.shape[0]
+    for i in range(n):
+        order[i] = i
+    passes = max(1, (nbits + 15) // 16)
+    bits = max(1, (nbits + passes - 1) // passes)
+    mask = (1 << bits) - 1
+    src, dst = order, tmp
+    for p in range(passes):
+        shift = p * bits
+        count[:mask + 2] = 0
+        for i in range(n):
+            count[((key[src[i]] >> shift) & mask) + 1] += 1
+        for b in range(mask + 1):
+            count[b + 1] += count[b]
+        for i in range(n):
+            b = (key[src[i]] >> shift) & mask
+            dst[count[b]] = src[i]
+            count[b] += 1
+        src, dst = dst, src
+    if passes % 2 == 1:
+        for i in range(n):
+            order[i] = tmp[i]
 
 
-def grid_shape(lo, hi, cell_size, dim):
-    """Cells per axis (3,) int64 covering [lo, hi]."""
-    ncell = np.ones(3, np.int64)
-    ncell[:dim] = np.floor((hi[:dim] - lo[:dim]) / cell_size).astype(np.int64) + 1
-    return ncell
+@njit(cache=True)
+def _cells(key, order, cell_key, cell_start, pcell):
+    """Occupied cells from the sorted keys; returns their number m."""
+    n = key.shape[0]
+    m = 0
+    for k in range(n):
+        kk = key[order[k]]
+        if k == 0 or kk != cell_key[m - 1]:
+            cell_key[m] = kk
+            cell_start[m] = k
+            m += 1
+        pcell[order[k]] = m - 1
+    cell_start[m] = n
+    return m
+
+
+@njit(cache=True, inline="always")
+def _lower_bound(a, m, x):
+    lo, hi = 0, m
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+def _neighbour_table(cell_key, m, ncell, dim, nbr):
+    """nbr[c, q]: the occupied cell at stencil offset q of cell c, or -1 (compiled twice:
+    serial below PARALLEL_CELLS occupied cells, where a parallel launch costs more)."""
+    nq = 3 ** dim
+    nminor = ncell[dim - 1]
+    for c in prange(m):
+        # the cell's coordinates, major axis first
+        k = cell_key[c]
+        x_minor = k % nminor
+        k //= nminor
+        x_mid = 0
+        if dim == 3:
+            x_mid = k % ncell[1]
+            k //= ncell[1]
+        x_major = k
+        for q in range(nq):
+            nbr[c, q] = -1
+        # one binary search per row of three cells along the minor axis
+        for row in range(nq // 3):
+            o_major = row // 3 - 1 if dim == 3 else row - 1
+            o_mid = row % 3 - 1 if dim == 3 else 0
+            a = x_major + o_major
+            b = x_mid + o_mid
+            if a < 0 or a >= ncell[0] or (dim == 3 and (b < 0 or b >= ncell[1])):
+                continue
+            base = (a * ncell[1] + b if dim == 3 else a) * nminor
+            p = _lower_bound(cell_key, m, base + max(x_minor - 1, 0))
+            for off in range(-1, 2):
+                x = x_minor + off
+                if x < 0 or x >= nminor:
+                    continue
+                want = base + x
+                while p < m and cell_key[p] < want:
+                    p += 1
+                if p < m and cell_key[p] == want:
+                    nbr[c, row * 3 + off + 1] = p
+
+
+_table_serial = njit(cache=True)(_neighbour_table)
+_table_parallel = njit(cache=True, parallel=True)(_neighbour_table)
+PARALLEL_CELLS = 4096
+
+
+@njit(cache=True)
+def _slabs(cell_key, cell_start, m, layer_cells, nslab_max, slab_start):
+    """Cut the occupied cells into at most ``nslab_max`` slabs of whole major layers
+    holding about equal numbers of particles (``slab_start``: first cell of each slab, then
+    m); returns the number of slabs. Balanced by particles rather than layers, so that the
+    even (odd) slabs of water lying on a floor split evenly between threads."""
+    n = cell_start[m]
+    target = n / nslab_max
+    slab_start[0] = 0
+    s = 1
+    cum = 0
+    prev = -1
+    for c in range(m):
+        layer = cell_key[c] // layer_cells
+        if c > 0 and layer != prev and cum >= s * target and s < nslab_max:
+            slab_start[s] = c
+            s += 1
+        cum += cell_start[c + 1] - cell_start[c]
+        prev = layer
+    slab_start[s] = m
+    return s
+
+
+@njit(cache=True)
+def _build(pos, cell_size, lo, ncell, axes, key, order, tmp, count, pcell, cell_key, cell_start, nbr, slab):
+    """The whole build but the neighbour table of a large grid; returns (m, nslab), or
+    (-1, axis cells) when the particles spread over MAX_AXIS_CELLS or more cells along an
+    axis, (-2, 0) for non-finite positions. ``lo`` (3,), ``ncell`` and ``axes`` (dim,) out."""
+    n, dim = pos.shape
+    box_lo, box_hi = bounding_box(pos)
+    cells = np.ones(3, np.int64)
+    for d in range(dim):
+        if n == 0:
+            box_lo[d] = 0.0
+            box_hi[d] = 0.0
+        if not (np.isfinite(box_lo[d]) and np.isfinite(box_hi[d])):
+            return -2, 0
+        span = (box_hi[d] - box_lo[d]) / cell_size
+        if span >= MAX_AXIS_CELLS - 1:
+            return -1, int(min(span, 9.0e18))
+        cells[d] = int(np.floor(span)) + 1
+        lo[d] = box_lo[d]
+    # axes by decreasing cell count (stable: ties keep x before y before z)
+    for a in range(dim):
+        axes[a] = a
+    for a in range(dim):
+        for b in range(dim - 1 - a):
+            if cells[axes[b + 1]] > cells[axes[b]]:
+                axes[b], axes[b + 1] = axes[b + 1], axes[b]
+    nbits = 0  # bits of the largest key: the sum over axes of ceil(log2(cells))
+    for a in range(dim):
+        ncell[a] = cells[axes[a]]
+        b = 0
+        while (1 << b) < ncell[a]:
+            b += 1
+        nbits += b
+    _keys(pos, lo, cell_size, axes, ncell, key)
+    _radix_sort(key, nbits, order, tmp, count)
+    if n == 0:
+        cell_start[0] = 0
+        slab[0] = 0
+        return 0, 0
+    m = _cells(key, order, cell_key, cell_start, pcell)
+    layer_cells = 1
+    for a in range(1, dim):
+        layer_cells *= ncell[a]
+    if m <= PARALLEL_CELLS:
+        _table_serial(cell_key, m, ncell, dim, nbr)
+    nslab = _slabs(cell_key, cell_start, m, layer_cells, MAX_SLABS, slab)
+    return m, nslab
+
+
+def _grow(arr, n, tail=()):
+    """``arr`` if it holds n rows, else a new array of n + n/4 rows (amortised growth)."""
+    if arr.shape[0] >= n and arr.shape[1:] == tail:
+        return arr
+    return np.empty((n + n // 4 + 1,) + tail, arr.dtype)
 
 
 class CellGrid:
-    """A cell grid over a set of points, rebuilt for every force evaluation.
+    """The sorted-key cell grid of a set of points, rebuilt for every force evaluation.
 
     :meth:`rebuild` reuses the arrays of the previous build (they grow when needed, by a
-    quarter more than asked), so a time step allocates none; ``order``, ``cell_start`` and
-    ``view`` are then views of them, valid until the next rebuild.
+    quarter more than asked), so a time step allocates none; ``order``, ``cell_start``,
+    ``pcell``, ``nbr`` and ``view`` are views of them, valid until the next rebuild.
+    Memory is O(n): a particle far from the rest adds one cell. Raises OverflowError only
+    for non-finite positions or a spread of 2**21 cells or more along an axis.
     """
 
     def __init__(self, pos: np.ndarray, cell_size: float):
         self.cell_size = float(cell_size)
-        self._cell = self._order = np.empty(0, np.int64)
-        self._start = self._fill = np.empty(0, np.int64)
+        i64 = np.empty(0, np.int64)
+        self._key = self._order = self._tmp = self._pcell = self._cell_key = self._start = i64
+        self._nbr = np.empty((0, 27), np.int64)
+        self._count = np.empty((1 << 16) + 2, np.int64)
+        self._slab = np.empty(MAX_SLABS + 1, np.int64)
+        self.lo = np.zeros(3)
+        self._ncell = np.ones(3, np.int64)
+        self._axes = np.zeros(3, np.int64)
         self.rebuild(pos)
 
     def rebuild(self, pos: np.ndarray) -> "CellGrid":
         n, dim = pos.shape
-        lo, hi = bounding_box(pos)
-        self.lo = lo
-        self.ncell = grid_shape(lo, hi, self.cell_size, dim)
-        ncells = int(np.prod(self.ncell))
-        if ncells > 8 * n + 4096:
-            # a few particles flew far from the rest: the grid would be mostly empty.
-            raise OverflowError(f"cell grid of {ncells} cells for {n} particles")
-        if self._cell.shape[0] < n:
-            self._cell, self._order = np.empty(n + n // 4, np.int64), np.empty(n + n // 4, np.int64)
-        if self._start.shape[0] < ncells + 1:
-            self._start, self._fill = np.empty(ncells + ncells // 4 + 1, np.int64), np.empty(ncells + ncells // 4 + 1, np.int64)
-        self.cell, self.order, self.cell_start = self._cell[:n], self._order[:n], self._start[:ncells + 1]
-        _cell_ids(pos, lo, self.cell_size, self.ncell, self.cell)
-        _counting_sort(self.cell, ncells, self.order, self.cell_start, self._fill)
-        self.view = Grid(self.order, self.cell_start, self.lo, self.cell_size, self.ncell)
+        self._key, self._order, self._tmp, self._pcell = (_grow(a, n) for a in
+                                                          (self._key, self._order, self._tmp, self._pcell))
+        self._cell_key, self._start = _grow(self._cell_key, n + 1), _grow(self._start, n + 1)
+        self._nbr = _grow(self._nbr, n, (3 ** dim,))
+        ncell, axes = self._ncell[:dim], self._axes[:dim]
+        m, nslab = _build(pos, self.cell_size, self.lo, ncell, axes, self._key[:n], self._order[:n], self._tmp[:n],
+                          self._count, self._pcell[:n], self._cell_key, self._start, self._nbr, self._slab)
+        if m == -2:
+            raise OverflowError("non-finite particle positions")
+        if m == -1:
+            raise OverflowError(f"particles spread over {nslab} cells along an axis (at most {MAX_AXIS_CELLS})")
+        self.ncell, self.axes, self.ncells = ncell, axes, m
+        self.order, self.pcell = self._order[:n], self._pcell[:n]
+        self.cell_key, self.cell_start, self.nbr = self._cell_key[:m], self._start[:m + 1], self._nbr[:m]
+        if m > PARALLEL_CELLS:
+            _table_parallel(self.cell_key, m, ncell, dim, self.nbr)
+        self.slab_start = self._slab[:nslab + 1]
+        self.view = Grid(self.order, self.cell_start, self.pcell, self.nbr, self.slab_start, self.lo, self.cell_size)
         return self
+
+    @property
+    def cell(self) -> np.ndarray:
+        """(n,) the occupied cell of each particle (same as ``pcell``)."""
+        return self.pcell
 
 
 @njit(cache=True)
-def neighbour_pairs(pos, order, cell_start, lo, cell_size, ncell, radius):
+def neighbour_pairs(pos, grid, radius):
     """All pairs (i, j), i != j, closer than ``radius``, found through the cell grid.
 
     Used by tests and diagnostics; the force kernels walk the cells the same way without
@@ -184,13 +346,11 @@ def neighbour_pairs(pos, order, cell_start, lo, cell_size, ncell, radius):
     out_i = []
     out_j = []
     for i in range(n):
-        cx, cy, cz = cell_coords(pos, i, lo, cell_size, ncell)
+        c = cell_of(grid, i)
         for q in range(3 ** dim):
-            c = neighbour_cell(cx, cy, cz, q, ncell, dim)
-            if c < 0:
-                continue
-            for k in range(cell_start[c], cell_start[c + 1]):
-                j = order[k]
+            k0, k1 = cell_range(grid, c, q)
+            for k in range(k0, k1):
+                j = grid.order[k]
                 if j == i:
                     continue
                 r2 = 0.0

@@ -196,3 +196,25 @@ def describe() -> list[dict]:
             row["hooks"] = []
         rows.append(row)
     return rows
+
+
+def _no_implementation(**kwargs):
+    return []
+
+
+class HookRelay:
+    """``pm.hook`` for the time loop: a hook that no registered plugin implements is a
+    plain function returning [] instead of a pluggy call (~25 us each, seven per step),
+    so hooks that do nothing cost nothing. Built once the run's plugins are registered."""
+
+    def __init__(self, pm: pluggy.PluginManager):
+        self.implemented = set()
+        for name in dir(pm.hook):
+            if not name.startswith("sph_"):
+                continue
+            caller = getattr(pm.hook, name)
+            if caller.get_hookimpls():
+                self.implemented.add(name)
+                setattr(self, name, caller)
+            else:
+                setattr(self, name, _no_implementation)

@@ -19,6 +19,7 @@ from .errors import CaseError, Instability
 from .forces import Forces, PressureField
 from .integrators import SCHEMES
 from .params import derive
+from .pluginhost import HookRelay
 from .particles import FLUID, SPHERE, ParticleState, lattice, make_block
 from .timestep import adaptive_dt, max_norms
 
@@ -90,7 +91,8 @@ class Simulation:
             checkpoint.restore_state(ctx, *saved)
         self.pressure = PressureField(prm)
         ctx._pressure = self.pressure
-        self.forces = Forces(ctx, pm.hook, self.pressure)
+        self.hooks = HookRelay(pm)  # the per-step hooks (no pluggy call where none is implemented)
+        self.forces = Forces(ctx, self.hooks, self.pressure)
         self.integrator = SCHEMES[cfg["integrator"]["scheme"]](
             ctx.state, self.forces, self._after_drift, self.update_pressure, evolves_density=sph)
         ctx._rates = self.integrator
@@ -142,7 +144,7 @@ class Simulation:
     # -- pieces of a step ---------------------------------------------------------------
 
     def _after_drift(self, pos0, pos, vel, acc, dt):
-        self.pm.hook.sph_after_integrate(ctx=self.ctx, pos0=pos0, pos=pos, vel=vel, acc=acc, dt=dt)
+        self.hooks.sph_after_integrate(ctx=self.ctx, pos0=pos0, pos=pos, vel=vel, acc=acc, dt=dt)
 
     def update_pressure(self):
         self.pressure.update(self.ctx.state, self.ctx.counters)
@@ -172,7 +174,7 @@ class Simulation:
                              tcfg["viscous_factor"])
             if tcfg["dt_max"] is not None:
                 dt = min(dt, tcfg["dt_max"])
-        bounds = [b for b in self.pm.hook.sph_max_dt(ctx=self.ctx) if b is not None]
+        bounds = [b for b in self.hooks.sph_max_dt(ctx=self.ctx) if b is not None]
         if bounds:
             dt = min(dt, min(bounds))
         if not math.isfinite(dt):
@@ -199,7 +201,7 @@ class Simulation:
         ctx.step += 1
         if ctx.step % cfg["checks"]["every"] == 0:
             self.check()
-        self.pm.hook.sph_after_step(ctx=ctx)
+        self.hooks.sph_after_step(ctx=ctx)
 
     # -- checks -----------------------------------------------------------------------
 
@@ -209,7 +211,7 @@ class Simulation:
         st, prm = self.state, self.params
         e = checks.total_energy(st.pos, st.vel, st.rho, st.m, prm.gravity, prm.rho0, prm.c0 or 1.0,
                                 prm.gamma, prm.sph)
-        return e + sum(x for x in self.pm.hook.sph_energy(ctx=self.ctx) if x is not None)
+        return e + sum(x for x in self.hooks.sph_energy(ctx=self.ctx) if x is not None)
 
     def _energy_reference(self):
         """E at the start of the run (kept in the core's stats, so a restart checks against
@@ -246,7 +248,7 @@ class Simulation:
                                   f"too large or too little dissipation")
 
     def output(self, final=False):
-        self.pm.hook.sph_output(ctx=self.ctx, final=final)
+        self.hooks.sph_output(ctx=self.ctx, final=final)
 
     def done(self) -> bool:
         return self.t_end - self.t <= 1e-9 * (self.dt or self.t_end)

@@ -1,4 +1,5 @@
-"""Cell-linked-list neighbour search: ``CellGrid`` + ``neighbour_pairs`` against brute force.
+"""Sorted-key cell grid: ``CellGrid`` + ``neighbour_pairs`` against brute force, the
+occupied-cell structure, the slabs of the pair loop, and spreads far beyond the water.
 
 Point sets come from hypothesis, with coordinates drawn both from the continuum and from
 exact multiples of the cell size (points on cell edges), duplicated points, a single
@@ -15,7 +16,7 @@ from hypothesis import strategies as st
 from sphcore.neighbours import CellGrid, neighbour_pairs
 
 CELL_SIZES = [0.1, 0.25, 0.3, 1.0, 0.013]
-MAX_CELLS = 7  # per axis: keeps the grid far below CellGrid's overflow guard
+MAX_CELLS = 7  # per axis of the drawn point sets
 
 
 def brute_force_pairs(pos: np.ndarray, radius: float) -> set[tuple[int, int]]:
@@ -38,7 +39,7 @@ def brute_force_pairs(pos: np.ndarray, radius: float) -> set[tuple[int, int]]:
 
 def grid_pairs(pos: np.ndarray, cell_size: float, radius: float):
     grid = CellGrid(pos, cell_size)
-    pi, pj = neighbour_pairs(pos, grid.order, grid.cell_start, grid.lo, grid.cell_size, grid.ncell, radius)
+    pi, pj = neighbour_pairs(pos, grid.view, radius)
     pairs = list(zip(pi.tolist(), pj.tolist()))
     assert len(pairs) == len(set(pairs)), "a pair was reported twice"
     return set(pairs), grid
@@ -117,34 +118,82 @@ def test_all_particles_in_one_cell(dim, seed, n):
     assert len(pairs) == len(brute_force_pairs(pos, cs))
 
 
+def cell_coords(grid, dim):
+    """(m, dim) integer coordinates of the occupied cells, per original axis."""
+    out = np.zeros((grid.ncells, dim), np.int64)
+    k = grid.cell_key.copy()
+    for a in range(dim - 1, -1, -1):  # the key's digits, minor axis last
+        out[:, grid.axes[a]] = k % grid.ncell[a]
+        k //= grid.ncell[a]
+    return out
+
+
 @settings(max_examples=100, deadline=None)
 @given(data=st.one_of(point_sets(2), point_sets(3)))
-def test_counting_sort_is_a_stable_permutation_grouped_by_cell(data):
+def test_sort_is_a_stable_permutation_grouped_by_occupied_cell(data):
     pos, cs = data
     n, dim = pos.shape
     grid = CellGrid(pos, cs)
-    ncells = int(np.prod(grid.ncell))
+    m = grid.ncells
     # order is a permutation of the particles
     assert sorted(grid.order.tolist()) == list(range(n))
-    # CSR offsets: monotone, from 0 to n, one more entry than cells
-    assert grid.cell_start.shape == (ncells + 1,)
+    # CSR offsets over occupied cells only: strictly increasing from 0 to n
+    assert grid.cell_start.shape == (m + 1,)
     assert grid.cell_start[0] == 0 and grid.cell_start[-1] == n
-    assert np.all(np.diff(grid.cell_start) >= 0)
-    # cells in order are non-decreasing, and each cell's slice holds exactly its particles,
-    # in their original order (the sort is stable)
+    assert np.all(np.diff(grid.cell_start) > 0)
+    assert np.all(np.diff(grid.cell_key) > 0)
+    # each cell's slice holds exactly its particles, in their original order (stable sort)
     assert np.all(np.diff(grid.cell[grid.order]) >= 0)
-    for c in range(ncells):
+    for c in range(m):
         members = grid.order[grid.cell_start[c]:grid.cell_start[c + 1]]
         assert members.tolist() == np.flatnonzero(grid.cell == c).tolist()
     # each particle's cell contains it (up to the clamp of the last cell and round-off)
-    idx = np.stack(np.unravel_index(grid.cell, tuple(grid.ncell), order="F"), axis=1)[:, :dim]
+    idx = cell_coords(grid, dim)[grid.cell]
     lo_corner = grid.lo[:dim] + idx * cs
     tol = 1e-9 * (1.0 + np.abs(pos))
     assert np.all(pos >= lo_corner - tol)
     assert np.all(pos <= lo_corner + cs + tol)
+    # the neighbour table lists exactly the occupied cells at each stencil offset
+    coords = cell_coords(grid, dim)
+    where = {tuple(c): i for i, c in enumerate(coords.tolist())}
+    offsets = np.stack(np.meshgrid(*[[-1, 0, 1]] * dim, indexing="ij"), -1).reshape(-1, dim)
+    for c in range(m):
+        for q, off in enumerate(offsets):
+            # q's digits run over the key's axes, major first
+            o = np.zeros(dim, np.int64)
+            o[grid.axes] = off
+            assert grid.nbr[c, q] == where.get(tuple((coords[c] + o).tolist()), -1)
 
 
-def test_far_flung_particle_overflows_the_grid():
-    pos = np.array([[0.0, 0.0], [1e4, 1e4]])
-    with pytest.raises(OverflowError):
-        CellGrid(pos, 0.01)
+@settings(max_examples=100, deadline=None)
+@given(data=st.one_of(point_sets(2), point_sets(3)))
+def test_slabs_of_one_parity_never_share_a_layer(data):
+    """The pair loop writes to a cell's own major layer and the next one; slabs of the same
+    parity run at once, so their layer ranges (plus one) must not overlap."""
+    pos, cs = data
+    dim = pos.shape[1]
+    grid = CellGrid(pos, cs)
+    s = grid.slab_start
+    assert s[0] == 0 and s[-1] == grid.ncells and np.all(np.diff(s) > 0)
+    major = cell_coords(grid, dim)[:, grid.axes[0]]
+    spans = [(major[s[k]], major[s[k + 1] - 1] + 1) for k in range(len(s) - 1)]
+    for k in range(len(spans) - 1):
+        assert spans[k][1] <= spans[k + 1][0] + 1 and major[s[k + 1] - 1] < major[s[k + 1]]
+    for k in range(len(spans) - 2):
+        assert spans[k][1] < spans[k + 2][0]
+
+
+def test_far_flung_particle_costs_one_cell():
+    """A particle 10^4 m from the rest (10^6 cells away) adds one occupied cell, not a
+    grid over the box; pairs stay right."""
+    pos = np.array([[0.0, 0.0], [0.005, 0.0], [1e4, 1e4]])
+    pairs, grid = grid_pairs(pos, 0.01, 0.01)
+    assert grid.ncells == 2
+    assert pairs == {(0, 1), (1, 0)}
+
+
+def test_spread_beyond_two_million_cells_or_non_finite_overflows():
+    with pytest.raises(OverflowError, match="cells along an axis"):
+        CellGrid(np.array([[0.0, 0.0], [1e5, 0.0]]), 0.01)
+    with pytest.raises(OverflowError, match="non-finite"):
+        CellGrid(np.array([[0.0, 0.0], [np.nan, 0.0]]), 0.01)

@@ -25,10 +25,10 @@ def position_divergence(n, pos, rho, m, grid, prm, normals, offsets, mirror, out
     r2max = support * support
     nplanes = normals.shape[0]
     for i in prange(n):
-        cx, cy, cz = cell_of(grid, pos, i)
+        c = cell_of(grid, i)
         s = 0.0
         for q in range(3 ** dim):
-            k0, k1 = cell_range(grid, cx, cy, cz, q, dim)
+            k0, k1 = cell_range(grid, c, q)
             for k in range(k0, k1):
                 j = grid.order[k]
                 vj = m[j] / rho[j]

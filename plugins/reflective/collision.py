@@ -51,7 +51,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from sphcore.api import particle_distance, plane_distance
+from sphcore.api import by_size, particle_distance, plane_distance
 
 #: relative contact allowance: a plane collides only when d < r - TOL_REL * r
 TOL_REL = 1e-9
@@ -63,7 +63,7 @@ def _limit(r):
     return r - TOL_REL * r
 
 
-@numba.njit(parallel=True, cache=True)
+@by_size
 def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
             velocity_at_contact, guarded_flags, reflection_counts):
     """Reflect every particle that left the domain during a step; return the guard count.
@@ -77,70 +77,90 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
     reflection_counts (n,) int32 out: reflections performed (0: untouched).
     ``pos`` and ``vel`` are changed in place; ``pos0`` and ``acc`` are only read.
     """
-    n, dim = pos.shape
-    nplanes = normals.shape[0]
+    n = pos.shape[0]
     guarded = 0
     for i in numba.prange(n):
-        # start A of the current sub-segment: C0, then C0' after a reflection (no allocation)
-        a0 = pos0[i, 0]
-        a1 = pos0[i, 1]
-        a2 = pos0[i, 2] if dim == 3 else 0.0
-        r = radius[i]
-        lim = _limit(r)
-        count = 0
         guarded_flags[i] = 0
-        while True:
-            best = -1
-            fbest = np.inf
-            dbest = 0.0
-            for k in range(nplanes):
-                db = particle_distance(normals, offsets, k, pos, i)
-                if db < lim:
-                    da = plane_distance(normals, offsets, k, a0, a1, a2)
-                    # d_A <= r: touching at the start (rest, C1 = C0, parallel motion): f = 0
-                    # otherwise d_A > r > d_B, so the denominator is positive
-                    f = 0.0 if da <= r else (da - r) / (da - db)
-                    if f < fbest:
-                        fbest = f
-                        best = k
-                        dbest = db
-            if best < 0:
+        reflection_counts[i] = 0
+        # most particles touch no wall: one cheap pass over the planes decides (the full
+        # loop below, even when it finds nothing, costs ten times more per particle)
+        lim = _limit(radius[i])
+        for k in range(normals.shape[0]):
+            if particle_distance(normals, offsets, k, pos, i) < lim:
+                g = _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
+                                 velocity_at_contact, guarded_flags, reflection_counts)
+                guarded += g
                 break
-            if count == max_reflections:
-                # guard: C0 is inside (the invariant); keep the velocity reflected so far
-                for j in range(dim):
-                    pos[i, j] = pos0[i, j]
-                guarded_flags[i] = 1
-                guarded += 1
-                break
-            # contact point C0' (Fig. 6): inside every plane, so the invariant holds for A
-            a0 += fbest * (pos[i, 0] - a0)
-            a1 += fbest * (pos[i, 1] - a1)
-            if dim == 3:
-                a2 += fbest * (pos[i, 2] - a2)
-            depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
-            u = 0.0
-            an = 0.0
-            for j in range(dim):
-                u += vel[i, j] * normals[best, j]
-                an += acc[i, j] * normals[best, j]
-            if u < 0.0:  # never reverse a particle already moving back in
-                if velocity_at_contact:
-                    uc2 = max(u * u + 2.0 * an * depth, 0.0)
-                    uf = np.sqrt(max(cr * cr * uc2 + 2.0 * an * cr * depth, 0.0))
-                else:
-                    uf = -cr * u
-                for j in range(dim):
-                    vel[i, j] += (uf - u) * normals[best, j]
-            shift = (1.0 + cr) * depth  # |t| of Eq. 1
-            for j in range(dim):
-                pos[i, j] += shift * normals[best, j]
-            count += 1
-        reflection_counts[i] = count
     return guarded
 
 
-@numba.njit(parallel=True, cache=True)
+@numba.njit(cache=True)
+def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
+                 velocity_at_contact, guarded_flags, reflection_counts):
+    """The paper's loop for particle i (earliest contact first, until inside or the guard);
+    returns 1 if the guard put it back at pos0, else 0."""
+    dim = pos.shape[1]
+    nplanes = normals.shape[0]
+    guarded = 0
+    # start A of the current sub-segment: C0, then C0' after a reflection (no allocation)
+    a0 = pos0[i, 0]
+    a1 = pos0[i, 1]
+    a2 = pos0[i, 2] if dim == 3 else 0.0
+    r = radius[i]
+    lim = _limit(r)
+    count = 0
+    while True:
+        best = -1
+        fbest = np.inf
+        dbest = 0.0
+        for k in range(nplanes):
+            db = particle_distance(normals, offsets, k, pos, i)
+            if db < lim:
+                da = plane_distance(normals, offsets, k, a0, a1, a2)
+                # d_A <= r: touching at the start (rest, C1 = C0, parallel motion): f = 0
+                # otherwise d_A > r > d_B, so the denominator is positive
+                f = 0.0 if da <= r else (da - r) / (da - db)
+                if f < fbest:
+                    fbest = f
+                    best = k
+                    dbest = db
+        if best < 0:
+            break
+        if count == max_reflections:
+            # guard: C0 is inside (the invariant); keep the velocity reflected so far
+            for j in range(dim):
+                pos[i, j] = pos0[i, j]
+            guarded_flags[i] = 1
+            guarded = 1
+            break
+        # contact point C0' (Fig. 6): inside every plane, so the invariant holds for A
+        a0 += fbest * (pos[i, 0] - a0)
+        a1 += fbest * (pos[i, 1] - a1)
+        if dim == 3:
+            a2 += fbest * (pos[i, 2] - a2)
+        depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
+        u = 0.0
+        an = 0.0
+        for j in range(dim):
+            u += vel[i, j] * normals[best, j]
+            an += acc[i, j] * normals[best, j]
+        if u < 0.0:  # never reverse a particle already moving back in
+            if velocity_at_contact:
+                uc2 = max(u * u + 2.0 * an * depth, 0.0)
+                uf = np.sqrt(max(cr * cr * uc2 + 2.0 * an * cr * depth, 0.0))
+            else:
+                uf = -cr * u
+            for j in range(dim):
+                vel[i, j] += (uf - u) * normals[best, j]
+        shift = (1.0 + cr) * depth  # |t| of Eq. 1
+        for j in range(dim):
+            pos[i, j] += shift * normals[best, j]
+        count += 1
+    reflection_counts[i] = count
+    return guarded
+
+
+@by_size
 def min_clearance(pos, radius, normals, offsets):
     """(n,) min over planes of d - r (m), with the kernel's own arithmetic for d."""
     n, dim = pos.shape
@@ -153,7 +173,7 @@ def min_clearance(pos, radius, normals, offsets):
     return out
 
 
-@numba.njit(parallel=True, cache=True)
+@by_size
 def outside_mask(pos, radius, normals, offsets):
     """(n,) bool: True where some plane has d < r - tol, exactly the kernel's collision test."""
     n, dim = pos.shape
