@@ -63,6 +63,7 @@ class Forces:
         self._grid = None
         self._shepard = np.zeros(1)
         self._work = np.zeros((0, 6))
+        self._src_buf = None  # fluid + plugin sources, reused between evaluations
         self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0),
                                False)
 
@@ -70,7 +71,8 @@ class Forces:
 
     def sources(self) -> Fields:
         """The fluid followed by any plugin source particles (ghosts), with the pressure the
-        momentum equation uses."""
+        momentum equation uses; with sources, views of arrays reused between evaluations
+        (valid until the next call)."""
         ctx = self.ctx
         st = ctx.state
         extra = [s for s in self.hook.sph_extra_sources(ctx=ctx) if s is not None and s.n]
@@ -79,7 +81,19 @@ class Forces:
         if not extra:
             return fluid
         ctx.counters["extra_sources"] += 1
-        return Fields(*(np.concatenate([a] + [getattr(s, f) for s in extra]) for a, f in zip(fluid, Fields._fields)))
+        n = st.n + self.n_sources
+        if self._src_buf is None or self._src_buf.pos.shape[0] < n or self._src_buf.pos.shape[1] != st.dim:
+            size = n + n // 4  # grows by a quarter: the ghost count changes from step to step
+            self._src_buf = Fields(*(np.empty((size,) + a.shape[1:], a.dtype) for a in fluid))
+        out = Fields(*(b[:n] for b in self._src_buf))
+        for a, b, name in zip(fluid, out, Fields._fields):
+            b[:st.n] = a
+            k = st.n
+            for s in extra:
+                part = getattr(s, name)
+                b[k:k + s.n] = part
+                k += s.n
+        return out
 
     def grid(self, pos, count=True) -> CellGrid:
         """The cell grid of ``pos``, rebuilt in the arrays of the last one (no allocation)."""

@@ -38,9 +38,17 @@ class ParticleState:
         return [(f.name, getattr(self, f.name)) for f in fields(self)]
 
     def permute(self, order: np.ndarray) -> None:
-        """Reorder every array by ``order`` (a permutation of 0..n-1)."""
+        """Reorder every array by ``order`` (a permutation of 0..n-1): each array is gathered
+        into a spare of its shape, which then replaces it, and the replaced one becomes the
+        spare for the next reorder (no allocation once the spares exist)."""
+        spares = self.__dict__.setdefault("_spares", {})
         for name, a in self.arrays():
-            setattr(self, name, np.ascontiguousarray(a[order]))
+            spare = spares.get(name)
+            if spare is None or spare.shape != a.shape or spare.dtype != a.dtype:
+                spare = np.empty_like(a)
+            np.take(a, order, axis=0, out=spare)
+            setattr(self, name, spare)
+            spares[name] = a
 
     def append(self, other: "ParticleState") -> None:
         """Add particles (e.g. from a plugin's set-up); ids continue after the largest."""

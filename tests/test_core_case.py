@@ -267,7 +267,7 @@ def test_defaults_are_filled_in(good_case):
     cfg = case.config
     assert cfg["kernel"]["name"] == "wendland_c2" and cfg["kernel"]["h_over_dx"] == 1.3
     assert cfg["integrator"]["scheme"] == "leapfrog"
-    assert cfg["time"]["dt"] is None and cfg["time"]["cfl"] == 0.2
+    assert cfg["time"]["dt"] is None and cfg["time"]["cfl"] == 0.3
     assert case.h == pytest.approx(1.3 * 0.02) and case.radius == pytest.approx(0.01)
     assert case.gravity.tolist() == [0.0, -9.81, 0.0]
     assert case.name == "good"
