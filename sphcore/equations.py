@@ -40,6 +40,7 @@ from numba import njit, prange
 
 from .corrections import _corrected
 from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
+from .parallel import PARALLEL_MIN
 
 
 class Fields(NamedTuple):
@@ -89,8 +90,8 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
     parallel without touching the same particle, so the result does not depend on the
     number of threads. A pair of two plugin sources (ghosts) is skipped, a pair of a fluid
     particle and a source acts on the fluid particle only. ``work`` (n_sources, 6) is
-    scratch (the near-wall sums of the wall completion, p/rho^2 and 1/rho); ``nth``: numba's thread count (only the
-    balance between threads depends on it).
+    scratch (the near-wall sums of the wall completion, p/rho^2 and 1/rho); ``nth``:
+    numba's thread count (only the balance between threads depends on it).
 
     Terms whose coefficient is zero are skipped, so a case without viscosity or density
     diffusion computes none. ``prm.modified_pressure``: gravity acts as g (1 - rho0/rho_i)
@@ -100,16 +101,14 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
     module docstring.
     """
     dim = src.pos.shape[1]
-    rho, p = src.rho, src.p
-    for i in prange(rho.shape[0]):
-        if i < n_dest:
-            for d in range(dim):
-                acc[i, d] = 0.0
-            drho[i] = 0.0
-        for d in range(4):
-            work[i, d] = 0.0
-        work[i, 4] = p[i] / (rho[i] * rho[i])  # per particle, not per pair: divisions are slow
-        work[i, 5] = 1.0 / rho[i]
+    n_src = src.rho.shape[0]
+    # element-wise passes: a parallel launch costs more than the work below PARALLEL_MIN
+    if n_src >= PARALLEL_MIN:
+        for i in prange(n_src):
+            _prepare(i, n_dest, dim, src, acc, drho, work)
+    else:
+        for i in range(n_src):
+            _prepare(i, n_dest, dim, src, acc, drho, work)
     slab_start = grid.slab_start
     nslab = slab_start.shape[0] - 1
     # prange gives each thread one contiguous block of tasks; the slabs differ in size
@@ -125,8 +124,27 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
             s = 2 * u + phase
             for c in range(slab_start[s], slab_start[s + 1]):
                 _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work)
-    for i in prange(n_dest):
-        _finish(i, dim, src, prm, wall, acc, drho, work)
+    if n_dest >= PARALLEL_MIN:
+        for i in prange(n_dest):
+            _finish(i, dim, src, prm, wall, acc, drho, work)
+    else:
+        for i in range(n_dest):
+            _finish(i, dim, src, prm, wall, acc, drho, work)
+
+
+@njit(cache=True, inline="always")
+def _prepare(i, n_dest, dim, src, acc, drho, work):
+    """Zero particle i's rates and sums; its p/rho^2 and 1/rho, per particle rather than
+    per pair (divisions are slow)."""
+    rho_i = src.rho[i]
+    if i < n_dest:
+        for d in range(dim):
+            acc[i, d] = 0.0
+        drho[i] = 0.0
+    for d in range(4):
+        work[i, d] = 0.0
+    work[i, 4] = src.p[i] / (rho_i * rho_i)
+    work[i, 5] = 1.0 / rho_i
 
 
 @njit(cache=True)

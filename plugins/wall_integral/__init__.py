@@ -40,9 +40,6 @@ import numpy as np
 
 from sphcore.api import CaseError, hookimpl
 
-from .lattice import lattice_error_tables, subtract_lattice_error
-from .normals import near_wall_projector
-from .share import wall_terms
 
 class WallIntegralPlugin:
     """Boundary-integral wall terms of the case's planes; one instance per run."""
@@ -65,6 +62,12 @@ class WallIntegralPlugin:
 
     @hookimpl
     def sph_wall_terms(self, ctx, terms):
+        # the kernels are imported on first use: every run loads every installed plugin to
+        # validate its tables, and these modules build their tables at import (~0.15 s)
+        from .lattice import lattice_error_tables, subtract_lattice_error
+        from .normals import near_wall_projector
+        from .share import wall_terms
+
         st, prm = ctx.state, ctx.params
         n, dim = st.n, prm.dim
         if self.share.shape[0] != n:
