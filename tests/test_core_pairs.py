@@ -17,7 +17,7 @@ from conftest import make_sim, write_case
 from core_cases import BLOB
 
 from sphcore.corrections import neighbour_sums
-from sphcore.equations import Fields, WallTerms, _complete_at_wall, sph_rates
+from sphcore.equations import PAIRS_PARALLEL_MIN, Fields, WallTerms, _complete_at_wall, sph_rates
 from sphcore.kernels import kernel_f, kernel_w
 from sphcore.neighbours import CellGrid
 
@@ -141,7 +141,7 @@ def test_pair_forces_are_equal_and_opposite(tmp_path, dim):
 def test_result_does_not_depend_on_the_thread_count(tmp_path, dim):
     """Slabs of one parity run in parallel; the order of the additions to a particle is set
     by the slabs alone, so one thread and two give the same bits."""
-    n_dest, src, cells, prm, L, wall = _setup(tmp_path, dim, 11, True, True, side=16 if dim == 2 else 9)
+    n_dest, src, cells, prm, L, wall = _setup(tmp_path, dim, 11, True, True, side=48 if dim == 2 else 13)
     out = []
     before = numba.get_num_threads()
     try:
@@ -155,3 +155,4 @@ def test_result_does_not_depend_on_the_thread_count(tmp_path, dim):
         numba.set_num_threads(before)
     assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
     assert len(cells.slab_start) > 3  # several slabs, so both phases ran more than one
+    assert src.pos.shape[0] >= PAIRS_PARALLEL_MIN  # large enough for the parallel pair loop
