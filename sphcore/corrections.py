@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit, prange
 
 from .kernels import kernel_f, kernel_w
-from .neighbours import cell_of, cell_range
+from .neighbours import cell_of, cell_range, separation
 
 
 @njit(cache=True)
@@ -61,10 +61,7 @@ def neighbour_sums(n_dest, src, grid, prm, want_L, L, want_shepard, shepard):
             k0, k1 = cell_range(grid, c, q)
             for k in range(k0, k1):
                 j = grid.order[k]
-                x0 = pos[i, 0] - pos[j, 0]
-                x1 = pos[i, 1] - pos[j, 1]
-                x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
-                r2 = x0 * x0 + x1 * x1 + x2 * x2
+                x0, x1, x2, r2 = separation(pos, i, j, dim)
                 if r2 >= r2max:
                     continue
                 r = np.sqrt(r2)

@@ -40,6 +40,7 @@ from numba import njit, prange
 
 from .corrections import _corrected
 from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
+from .neighbours import separation
 from .parallel import PARALLEL_MIN
 
 PAIRS_PARALLEL_MIN = 2048  # particles: the pair loop runs serial below (one thread is faster)
@@ -209,10 +210,7 @@ def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work):
                 dj = j < n_dest
                 if not (di or dj):
                     continue  # two sources (ghosts) do not interact
-                x0 = pos[i, 0] - pos[j, 0]
-                x1 = pos[i, 1] - pos[j, 1]
-                x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
-                r2 = x0 * x0 + x1 * x1 + x2 * x2
+                x0, x1, x2, r2 = separation(pos, i, j, dim)
                 if r2 >= r2max:
                     continue
                 r = np.sqrt(r2)

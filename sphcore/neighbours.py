@@ -93,6 +93,16 @@ def cell_range(grid, c, q):
     return grid.cell_start[c2], grid.cell_start[c2 + 1]
 
 
+@njit(cache=True, inline="always")
+def separation(pos, i, j, dim):
+    """(x0, x1, x2, r^2): x_i - x_j (x2 = 0 in 2D) and its squared length, as every pair
+    kernel computes it."""
+    x0 = pos[i, 0] - pos[j, 0]
+    x1 = pos[i, 1] - pos[j, 1]
+    x2 = pos[i, 2] - pos[j, 2] if dim == 3 else 0.0
+    return x0, x1, x2, x0 * x0 + x1 * x1 + x2 * x2
+
+
 @njit(cache=True)
 def _keys(pos, lo, cell_size, axes, ncell, key):
     """key[i] = mixed-radix cell index, axes[0] (major) most significant."""

@@ -14,6 +14,8 @@ integers or compared, never accumulated in floating point across threads).
 
 from __future__ import annotations
 
+import types
+
 from numba import njit
 
 PARALLEL_MIN = 20_000  # particles (rows of the first argument)
@@ -24,7 +26,14 @@ class by_size:
 
     def __init__(self, pyfunc, **njit_options):
         self.serial = njit(cache=True, **njit_options)(pyfunc)
-        self.parallel = njit(cache=True, parallel=True, **njit_options)(pyfunc)
+        # numba's disk cache is indexed by the function's qualified name, not by the
+        # parallel flag: the parallel build needs a name of its own, or it loads the serial
+        # build from the cache (measured: both ran at the serial speed)
+        twin = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__ + "_parallel",
+                                  pyfunc.__defaults__, pyfunc.__closure__)
+        twin.__qualname__ = pyfunc.__qualname__ + "_parallel"
+        twin.__doc__ = pyfunc.__doc__
+        self.parallel = njit(cache=True, parallel=True, **njit_options)(twin)
         self.__doc__ = pyfunc.__doc__
         self.__name__ = pyfunc.__name__
         self.__wrapped__ = pyfunc

@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit, prange
 
 
-from sphcore.api import FLUID, Sources, by_size, eos, plane_distance
+from sphcore.api import FLUID, Sources, eos, plane_distance
 
 
 #: smallest base (p - p_b)/B + 1 of the inverse Tait equation: keeps rho_g real and
@@ -160,7 +160,7 @@ def _count_one(pos, vel, i, near, normals, offsets, max_order, free_slip, tol):
 CHUNK = 4096
 
 
-@by_size
+@njit(cache=True, parallel=True)
 def count_images(pos, vel, kind, normals, offsets, support, max_order, free_slip, tol, near, counts):
     """Pass 1: near[i] = mask of the planes within support of fluid particle i (0 for
     non-fluid), counts[i] = number of its kept images."""
@@ -222,7 +222,7 @@ def _fill_one(pos, vel, rho, p, m, i, near, normals, offsets, max_order, free_sl
         sub = (sub - 1) & near
 
 
-@by_size
+@njit(cache=True, parallel=True)
 def fill_images(pos, vel, rho, p, m, near, normals, offsets, max_order, free_slip, tol,
                 hydrostatic, gravity, rho0, c0, gamma, p_background, rho_ref, start,
                 gpos, gvel, grho, gp, gm, gsrc):

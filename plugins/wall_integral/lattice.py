@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphcore.api import by_size, kernel_f, kernel_w, particle_distance
+from sphcore.api import kernel_f, kernel_w, particle_distance
 
 from .share import wall_terms_at
 
@@ -120,7 +120,7 @@ def _interp(nodes, tab, m, d0, d1, d2, col):
     return v
 
 
-@by_size
+@njit(cache=True, parallel=True)
 def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad, hydro,
                            fill):
     """Per particle, over the walls within ``support`` (inward normals n_a): grad (n, dim,

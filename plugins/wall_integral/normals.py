@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from sphcore.api import by_size, particle_distance
+from sphcore.api import particle_distance
 
 TOL = 1e-6  # a normal within this (squared) of the span already held adds no direction
 
@@ -38,7 +38,7 @@ def _add_direction(basis, count, dim, v0, v1, v2):
     return basis, count + 1
 
 
-@by_size
+@njit(cache=True, parallel=True)
 def near_wall_projector(pos, normals, offsets, support, q):
     """q[i] (dim, dim) <- projector onto span(q[i], normals of the planes with d < support)."""
     n, dim = pos.shape

@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphcore.api import by_size, particle_distance, plane_distance
+from sphcore.api import particle_distance, plane_distance
 
 from .faces import PS2_, _face2, _face3, _lval, _segment2
 from .tables import PS, PW, PW2
@@ -188,7 +188,7 @@ def _point_core(x0, x1, x2, normals, offsets, kernel_id, h, g0, g1, g2):
     return s, gr0, gr1, gr2, t0, t1, t2
 
 
-@by_size
+@njit(cache=True, parallel=True)
 def wall_terms(pos, normals, offsets, kernel_id, h, gravity, share, grad, hydro):
     """Fill share (n,), grad (n, >=dim) and hydro (n, >=dim) for every particle; see module doc.
 
