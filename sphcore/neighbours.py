@@ -34,6 +34,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
+from .parallel import serial_and_parallel
+
 MAX_AXIS_CELLS = 1 << 21  # cells per axis; the keys of three axes then fit in an int64
 MAX_SLABS = 64  # slabs of the pair loop (two phases of up to 32 parallel tasks)
 
@@ -210,8 +212,7 @@ def _neighbour_table(cell_key, m, ncell, dim, nbr):
                     nbr[c, row * 3 + off + 1] = p
 
 
-_table_serial = njit(cache=True)(_neighbour_table)
-_table_parallel = njit(cache=True, parallel=True)(_neighbour_table)
+_table_serial, _table_parallel = serial_and_parallel(_neighbour_table)
 PARALLEL_CELLS = 4096
 
 

@@ -21,19 +21,24 @@ from numba import njit
 PARALLEL_MIN = 20_000  # particles (rows of the first argument)
 
 
+def serial_and_parallel(pyfunc, **njit_options):
+    """(serial, parallel) numba builds of a prange kernel, each cached on disk under its own
+    name: numba's cache is indexed by the function's qualified name, not by the parallel
+    flag, so a second build of the same function would load the first one's code
+    (measured: both ran serial)."""
+    serial = njit(cache=True, **njit_options)(pyfunc)
+    twin = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__ + "_parallel",
+                              pyfunc.__defaults__, pyfunc.__closure__)
+    twin.__qualname__ = pyfunc.__qualname__ + "_parallel"
+    twin.__doc__ = pyfunc.__doc__
+    return serial, njit(cache=True, parallel=True, **njit_options)(twin)
+
+
 class by_size:
     """A kernel compiled twice (serial, parallel; both cached on disk), called by size."""
 
     def __init__(self, pyfunc, **njit_options):
-        self.serial = njit(cache=True, **njit_options)(pyfunc)
-        # numba's disk cache is indexed by the function's qualified name, not by the
-        # parallel flag: the parallel build needs a name of its own, or it loads the serial
-        # build from the cache (measured: both ran at the serial speed)
-        twin = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__ + "_parallel",
-                                  pyfunc.__defaults__, pyfunc.__closure__)
-        twin.__qualname__ = pyfunc.__qualname__ + "_parallel"
-        twin.__doc__ = pyfunc.__doc__
-        self.parallel = njit(cache=True, parallel=True, **njit_options)(twin)
+        self.serial, self.parallel = serial_and_parallel(pyfunc, **njit_options)
         self.__doc__ = pyfunc.__doc__
         self.__name__ = pyfunc.__name__
         self.__wrapped__ = pyfunc
