@@ -57,7 +57,7 @@ def neighbour_sums(n_dest, src, grid, prm, want_L, L, want_shepard, shepard):
                     L[i, a, b] = 0.0  # accumulates M_i, inverted in place below
         num = 0.0
         den = 0.0
-        for q in range(3 ** dim):
+        for q in range(grid.nbr.shape[1]):
             k0, k1 = cell_range(grid, c, q)
             for k in range(k0, k1):
                 j = grid.order[k]

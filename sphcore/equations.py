@@ -183,7 +183,8 @@ def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work):
     n_L = L.shape[0] if use_L else 0
     walls = wall.active
     order, cell_start, nbr = grid.order, grid.cell_start, grid.nbr
-    centre = 3 ** dim // 2
+    nq = nbr.shape[1]
+    centre = nq // 2
     for k in range(cell_start[c], cell_start[c + 1]):
         i = order[k]
         di = i < n_dest
@@ -200,7 +201,7 @@ def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work):
         pi_r = work[i, 4]
         irho_i = work[i, 5]
         near_i = walls and di and wall.share[i] > 0.0
-        for q in range(centre, 3 ** dim):
+        for q in range(centre, nq):
             c2 = nbr[c, q]
             if c2 < 0:
                 continue

@@ -1,30 +1,40 @@
 """Neighbour search on sorted cell keys: memory follows the particles, not the box.
 
-Particles are binned into square/cubic cells of side ``cell_size`` (the kernel support,
-2h). Each particle gets the integer key of its cell on the grid over the particles'
-bounding box, with the axis that has the most cells as the most significant digit (the
-"major" axis), then the others. A stable LSD radix sort of the keys gives ``order``
-(particle indices grouped by cell, in key order); only the cells that hold particles are
-kept (``cell_start``: CSR offsets, cell c holds ``order[cell_start[c]:cell_start[c+1]]``),
-so a few particles far from the rest cost a few cells, not a grid over the whole box.
-For every occupied cell the table ``nbr`` (m, 3**dim) lists its occupied neighbour cells
+Particles are binned into square/cubic cells of side ``radius / reach`` (radius: the
+kernel support 2h; ``reach`` = 1 by default, so cells of side 2h). Each particle gets the
+integer key of its cell on the grid over the particles' bounding box, with the axis that
+has the most cells as the most significant digit (the "major" axis). A stable LSD radix
+sort of the keys gives ``order`` (particle indices grouped by cell, in key order); only
+the cells that hold particles are kept (``cell_start``: CSR offsets, cell c holds
+``order[cell_start[c]:cell_start[c+1]]``), so a few particles far from the rest cost a few
+cells, not a grid over the whole box. For every occupied cell the table ``nbr``
+(m, (2 reach + 1)^dim) lists its occupied neighbour cells within ``reach`` cells per axis
 (-1: empty or outside), found once per build by binary search over the keys; every kernel
 walks the neighbours through it:
 
     c = cell_of(grid, i)
-    for q in range(3 ** dim):
+    for q in range(grid.nbr.shape[1]):
         k0, k1 = cell_range(grid, c, q)
         for k in range(k0, k1):
             j = grid.order[k]
 
-Stencil index q = sum over axes (major first) of (offset + 1) 3^(dim-1-a); q = centre
-(4 in 2D, 13 in 3D) is the cell itself, q > centre are the "forward" neighbours, so that
-walking the cell and its forward neighbours visits every pair of cells once (the pair
-loop of :func:`sphcore.equations.sph_rates`). ``slab_start`` cuts the occupied cells
-into slabs of whole layers along the major axis, balanced by particle count; a cell's forward neighbours lie in its
-own layer or the next, so slabs of the same parity never touch the same particles: the
-pair loop runs the even slabs in parallel, then the odd ones, race-free, and the order
-of the additions to each particle depends on the slabs alone, not on the thread count.
+Why cells of side 2h: cells of side h (reach 2) hold 5^dim h^dim around a particle
+instead of 6^dim, 42% fewer candidate pairs in 3D, but walking four (eight) times as many,
+nearly empty cells cost more than the candidates saved: measured with
+``benchmarks/bench_scale.py``, one thread, 2D 10^5 particles 3.76 -> 2.09 million
+particle-steps/s, 3D 10^5 0.93 -> 0.64 million, and the grid build 47 -> 333 us for 2,592
+particles. ``reach`` stays a parameter (tested for 1 to 3).
+
+Stencil index q = sum over axes (major first) of (offset + reach) w^(dim-1-a), w = 2 reach
++ 1; q = centre (the middle index) is the cell itself, q > centre are the "forward"
+neighbours, so that walking the cell and its forward neighbours visits every pair of
+cells once (the pair loop of :func:`sphcore.equations.sph_rates`). ``slab_start`` cuts
+the occupied cells into slabs of at least ``reach`` whole layers along the major axis,
+balanced by particle count; a cell's forward neighbours lie at most ``reach`` layers
+ahead, so a slab writes into itself and the next slab only, and slabs of the same parity
+never touch the same particles: the pair loop runs the even slabs in parallel, then the
+odd ones, race-free, and the order of the additions to each particle depends on the slabs
+alone, not on the thread count.
 """
 
 from __future__ import annotations
@@ -38,6 +48,7 @@ from .parallel import serial_and_parallel
 
 MAX_AXIS_CELLS = 1 << 21  # cells per axis; the keys of three axes then fit in an int64
 MAX_SLABS = 64  # slabs of the pair loop (two phases of up to 32 parallel tasks)
+REACH = 1  # cells per search radius: cells of side 2h for the 2h support, a 3^dim stencil
 
 
 class Grid(NamedTuple):
@@ -45,7 +56,7 @@ class Grid(NamedTuple):
 
     ``order`` (n,) particle indices grouped by cell; ``cell_start`` (m + 1,) CSR offsets of
     the m occupied cells; ``pcell`` (n,) the occupied cell of each particle; ``nbr``
-    (m, 3**dim) occupied neighbour cells (-1: none); ``slab_start`` (nslab + 1,) cell
+    (m, (2 reach + 1)**dim) occupied neighbour cells (-1: none); ``slab_start`` (nslab + 1,) cell
     offsets of the slabs of the pair loop; ``lo`` (3,) lower corner (m) and ``cell_size`` (m).
     """
 
@@ -174,10 +185,11 @@ def _lower_bound(a, m, x):
     return lo
 
 
-def _neighbour_table(cell_key, m, ncell, dim, nbr):
-    """nbr[c, q]: the occupied cell at stencil offset q of cell c, or -1 (compiled twice:
-    serial below PARALLEL_CELLS occupied cells, where a parallel launch costs more)."""
-    nq = 3 ** dim
+def _neighbour_table(cell_key, m, ncell, dim, reach, nbr):
+    """nbr[c, q]: the occupied cell at stencil offset q of cell c, or -1; offsets -reach ..
+    reach per axis (compiled twice: serial below PARALLEL_CELLS occupied cells)."""
+    w = 2 * reach + 1
+    nq = w ** dim
     nminor = ncell[dim - 1]
     for c in prange(m):
         # the cell's coordinates, major axis first
@@ -191,17 +203,17 @@ def _neighbour_table(cell_key, m, ncell, dim, nbr):
         x_major = k
         for q in range(nq):
             nbr[c, q] = -1
-        # one binary search per row of three cells along the minor axis
-        for row in range(nq // 3):
-            o_major = row // 3 - 1 if dim == 3 else row - 1
-            o_mid = row % 3 - 1 if dim == 3 else 0
+        # one binary search per row of w cells along the minor axis
+        for row in range(nq // w):
+            o_major = row // w - reach if dim == 3 else row - reach
+            o_mid = row % w - reach if dim == 3 else 0
             a = x_major + o_major
             b = x_mid + o_mid
             if a < 0 or a >= ncell[0] or (dim == 3 and (b < 0 or b >= ncell[1])):
                 continue
             base = (a * ncell[1] + b if dim == 3 else a) * nminor
-            p = _lower_bound(cell_key, m, base + max(x_minor - 1, 0))
-            for off in range(-1, 2):
+            p = _lower_bound(cell_key, m, base + max(x_minor - reach, 0))
+            for off in range(-reach, reach + 1):
                 x = x_minor + off
                 if x < 0 or x >= nminor:
                     continue
@@ -209,7 +221,7 @@ def _neighbour_table(cell_key, m, ncell, dim, nbr):
                 while p < m and cell_key[p] < want:
                     p += 1
                 if p < m and cell_key[p] == want:
-                    nbr[c, row * 3 + off + 1] = p
+                    nbr[c, row * w + off + reach] = p
 
 
 _table_serial, _table_parallel = serial_and_parallel(_neighbour_table)
@@ -217,22 +229,27 @@ PARALLEL_CELLS = 4096
 
 
 @njit(cache=True)
-def _slabs(cell_key, cell_start, m, layer_cells, nslab_max, slab_start):
+def _slabs(cell_key, cell_start, m, layer_cells, reach, nslab_max, slab_start):
     """Cut the occupied cells into at most ``nslab_max`` slabs of whole major layers
     holding about equal numbers of particles (``slab_start``: first cell of each slab, then
     m); returns the number of slabs. Balanced by particles rather than layers, so that the
-    even (odd) slabs of water lying on a floor split evenly between threads."""
+    even (odd) slabs of water lying on a floor split evenly between threads. Every slab
+    but the last spans at least ``reach`` layers: a cell's forward neighbours reach that far
+    ahead, so a slab writes into the next one only, never into the one after."""
     n = cell_start[m]
     target = n / nslab_max
     slab_start[0] = 0
     s = 1
     cum = 0
     prev = -1
+    first = cell_key[0] // layer_cells if m else 0
     for c in range(m):
         layer = cell_key[c] // layer_cells
-        if c > 0 and layer != prev and cum >= s * target and s < nslab_max:
+        if (c > 0 and layer != prev and layer - first >= reach and cum >= s * target
+                and s < nslab_max):
             slab_start[s] = c
             s += 1
+            first = layer
         cum += cell_start[c + 1] - cell_start[c]
         prev = layer
     slab_start[s] = m
@@ -240,7 +257,8 @@ def _slabs(cell_key, cell_start, m, layer_cells, nslab_max, slab_start):
 
 
 @njit(cache=True)
-def _build(pos, cell_size, lo, ncell, axes, key, order, tmp, count, pcell, cell_key, cell_start, nbr, slab):
+def _build(pos, cell_size, reach, lo, ncell, axes, key, order, tmp, count, pcell, cell_key, cell_start, nbr,
+           slab):
     """The whole build but the neighbour table of a large grid; returns (m, nslab), or
     (-1, axis cells) when the particles spread over MAX_AXIS_CELLS or more cells along an
     axis, (-2, 0) for non-finite positions. ``lo`` (3,), ``ncell`` and ``axes`` (dim,) out."""
@@ -283,8 +301,8 @@ def _build(pos, cell_size, lo, ncell, axes, key, order, tmp, count, pcell, cell_
     for a in range(1, dim):
         layer_cells *= ncell[a]
     if m <= PARALLEL_CELLS:
-        _table_serial(cell_key, m, ncell, dim, nbr)
-    nslab = _slabs(cell_key, cell_start, m, layer_cells, MAX_SLABS, slab)
+        _table_serial(cell_key, m, ncell, dim, reach, nbr)
+    nslab = _slabs(cell_key, cell_start, m, layer_cells, reach, MAX_SLABS, slab)
     return m, nslab
 
 
@@ -305,11 +323,12 @@ class CellGrid:
     for non-finite positions or a spread of 2**21 cells or more along an axis.
     """
 
-    def __init__(self, pos: np.ndarray, cell_size: float):
-        self.cell_size = float(cell_size)
+    def __init__(self, pos: np.ndarray, radius: float, reach: int = REACH):
+        self.radius, self.reach = float(radius), int(reach)
+        self.cell_size = self.radius / self.reach
         i64 = np.empty(0, np.int64)
         self._key = self._order = self._tmp = self._pcell = self._cell_key = self._start = i64
-        self._nbr = np.empty((0, 27), np.int64)
+        self._nbr = np.empty((0, (2 * self.reach + 1) ** 3), np.int64)
         self._count = np.empty((1 << 16) + 2, np.int64)
         self._slab = np.empty(MAX_SLABS + 1, np.int64)
         self.lo = np.zeros(3)
@@ -322,9 +341,9 @@ class CellGrid:
         self._key, self._order, self._tmp, self._pcell = (_grow(a, n) for a in
                                                           (self._key, self._order, self._tmp, self._pcell))
         self._cell_key, self._start = _grow(self._cell_key, n + 1), _grow(self._start, n + 1)
-        self._nbr = _grow(self._nbr, n, (3 ** dim,))
+        self._nbr = _grow(self._nbr, n, ((2 * self.reach + 1) ** dim,))
         ncell, axes = self._ncell[:dim], self._axes[:dim]
-        m, nslab = _build(pos, self.cell_size, self.lo, ncell, axes, self._key[:n], self._order[:n], self._tmp[:n],
+        m, nslab = _build(pos, self.cell_size, self.reach, self.lo, ncell, axes, self._key[:n], self._order[:n], self._tmp[:n],
                           self._count, self._pcell[:n], self._cell_key, self._start, self._nbr, self._slab)
         if m == -2:
             raise OverflowError("non-finite particle positions")
@@ -334,7 +353,7 @@ class CellGrid:
         self.order, self.pcell = self._order[:n], self._pcell[:n]
         self.cell_key, self.cell_start, self.nbr = self._cell_key[:m], self._start[:m + 1], self._nbr[:m]
         if m > PARALLEL_CELLS:
-            _table_parallel(self.cell_key, m, ncell, dim, self.nbr)
+            _table_parallel(self.cell_key, m, ncell, dim, self.reach, self.nbr)
         self.slab_start = self._slab[:nslab + 1]
         self.view = Grid(self.order, self.cell_start, self.pcell, self.nbr, self.slab_start, self.lo, self.cell_size)
         return self
@@ -358,7 +377,7 @@ def neighbour_pairs(pos, grid, radius):
     out_j = []
     for i in range(n):
         c = cell_of(grid, i)
-        for q in range(3 ** dim):
+        for q in range(grid.nbr.shape[1]):
             k0, k1 = cell_range(grid, c, q)
             for k in range(k0, k1):
                 j = grid.order[k]

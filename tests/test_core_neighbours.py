@@ -37,8 +37,10 @@ def brute_force_pairs(pos: np.ndarray, radius: float) -> set[tuple[int, int]]:
     return out
 
 
-def grid_pairs(pos: np.ndarray, cell_size: float, radius: float):
-    grid = CellGrid(pos, cell_size)
+def grid_pairs(pos: np.ndarray, cell_size: float, radius: float, reach: int = 1):
+    """Pairs within ``radius`` from a grid built for the search radius ``cell_size``
+    (cells of side cell_size / reach)."""
+    grid = CellGrid(pos, cell_size, reach)
     pi, pj = neighbour_pairs(pos, grid.view, radius)
     pairs = list(zip(pi.tolist(), pj.tolist()))
     assert len(pairs) == len(set(pairs)), "a pair was reported twice"
@@ -80,11 +82,11 @@ def test_pairs_equal_brute_force_3d(data):
     assert pairs == brute_force_pairs(pos, cs)
 
 
-@settings(max_examples=50, deadline=None)
-@given(data=st.one_of(point_sets(2), point_sets(3)), frac=st.floats(0.05, 1.0))
-def test_pairs_for_a_radius_below_the_cell_size(data, frac):
+@settings(max_examples=80, deadline=None)
+@given(data=st.one_of(point_sets(2), point_sets(3)), frac=st.floats(0.05, 1.0), reach=st.sampled_from([1, 2, 3]))
+def test_pairs_for_a_radius_below_the_search_radius(data, frac, reach):
     pos, cs = data
-    pairs, _ = grid_pairs(pos, cs, frac * cs)
+    pairs, _ = grid_pairs(pos, cs, frac * cs, reach)
     assert pairs == brute_force_pairs(pos, frac * cs)
 
 
@@ -110,7 +112,7 @@ def test_duplicated_points_are_neighbours_of_each_other(dim):
 def test_all_particles_in_one_cell(dim, seed, n):
     cs = 0.1
     pos = np.random.default_rng(seed).uniform(0.0, 0.99 * cs, size=(n, dim))
-    pairs, grid = grid_pairs(pos, cs, cs)
+    pairs, grid = grid_pairs(pos, cs, cs, reach=1)
     assert int(np.prod(grid.ncell)) == 1
     assert np.all(grid.cell == 0)
     assert pairs == brute_force_pairs(pos, cs)
@@ -129,11 +131,12 @@ def cell_coords(grid, dim):
 
 
 @settings(max_examples=100, deadline=None)
-@given(data=st.one_of(point_sets(2), point_sets(3)))
-def test_sort_is_a_stable_permutation_grouped_by_occupied_cell(data):
-    pos, cs = data
+@given(data=st.one_of(point_sets(2), point_sets(3)), reach=st.sampled_from([1, 2, 3]))
+def test_sort_is_a_stable_permutation_grouped_by_occupied_cell(data, reach):
+    pos, radius = data
     n, dim = pos.shape
-    grid = CellGrid(pos, cs)
+    grid = CellGrid(pos, radius, reach)
+    cs = grid.cell_size
     m = grid.ncells
     # order is a permutation of the particles
     assert sorted(grid.order.tolist()) == list(range(n))
@@ -156,7 +159,9 @@ def test_sort_is_a_stable_permutation_grouped_by_occupied_cell(data):
     # the neighbour table lists exactly the occupied cells at each stencil offset
     coords = cell_coords(grid, dim)
     where = {tuple(c): i for i, c in enumerate(coords.tolist())}
-    offsets = np.stack(np.meshgrid(*[[-1, 0, 1]] * dim, indexing="ij"), -1).reshape(-1, dim)
+    span = list(range(-reach, reach + 1))
+    offsets = np.stack(np.meshgrid(*[span] * dim, indexing="ij"), -1).reshape(-1, dim)
+    assert grid.nbr.shape == (m, len(span) ** dim)
     for c in range(m):
         for q, off in enumerate(offsets):
             # q's digits run over the key's axes, major first
@@ -166,27 +171,29 @@ def test_sort_is_a_stable_permutation_grouped_by_occupied_cell(data):
 
 
 @settings(max_examples=100, deadline=None)
-@given(data=st.one_of(point_sets(2), point_sets(3)))
-def test_slabs_of_one_parity_never_share_a_layer(data):
-    """The pair loop writes to a cell's own major layer and the next one; slabs of the same
-    parity run at once, so their layer ranges (plus one) must not overlap."""
-    pos, cs = data
+@given(data=st.one_of(point_sets(2), point_sets(3)), reach=st.sampled_from([1, 2, 3]))
+def test_slabs_of_one_parity_never_share_a_layer(data, reach):
+    """The pair loop writes to a cell's own major layers and up to ``reach`` layers ahead;
+    slabs of the same parity run at once, so the layers one writes must not reach the next
+    slab of its parity."""
+    pos, radius = data
     dim = pos.shape[1]
-    grid = CellGrid(pos, cs)
+    grid = CellGrid(pos, radius, reach)
     s = grid.slab_start
     assert s[0] == 0 and s[-1] == grid.ncells and np.all(np.diff(s) > 0)
     major = cell_coords(grid, dim)[:, grid.axes[0]]
-    spans = [(major[s[k]], major[s[k + 1] - 1] + 1) for k in range(len(s) - 1)]
-    for k in range(len(spans) - 1):
-        assert spans[k][1] <= spans[k + 1][0] + 1 and major[s[k + 1] - 1] < major[s[k + 1]]
-    for k in range(len(spans) - 2):
-        assert spans[k][1] < spans[k + 2][0]
+    first = [major[s[k]] for k in range(len(s) - 1)]  # first layer of each slab
+    last = [major[s[k + 1] - 1] for k in range(len(s) - 1)]  # its last occupied layer
+    for k in range(len(s) - 2):
+        assert last[k] < first[k + 1]  # whole layers
+    for k in range(len(s) - 3):
+        assert last[k] + reach < first[k + 2]  # what slab k writes stops before slab k + 2
 
 
 def test_far_flung_particle_costs_one_cell():
     """A particle 10^4 m from the rest (10^6 cells away) adds one occupied cell, not a
     grid over the box; pairs stay right."""
-    pos = np.array([[0.0, 0.0], [0.005, 0.0], [1e4, 1e4]])
+    pos = np.array([[0.001, 0.0], [0.004, 0.0], [1e4, 1e4]])  # the first two share a cell
     pairs, grid = grid_pairs(pos, 0.01, 0.01)
     assert grid.ncells == 2
     assert pairs == {(0, 1), (1, 0)}

@@ -27,7 +27,7 @@ def position_divergence(n, pos, rho, m, grid, prm, normals, offsets, mirror, out
     for i in prange(n):
         c = cell_of(grid, i)
         s = 0.0
-        for q in range(3 ** dim):
+        for q in range(grid.nbr.shape[1]):
             k0, k1 = cell_range(grid, c, q)
             for k in range(k0, k1):
                 j = grid.order[k]
