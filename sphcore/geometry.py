@@ -6,6 +6,7 @@ inside when its signed distance d = n . (C - X0) (Eq. 4) is at least r for every
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -41,9 +42,10 @@ class Planes:
     def count(self) -> int:
         return self.normals.shape[0]
 
-    @property
+    @functools.cached_property
     def offsets(self) -> np.ndarray:
-        """n . X0 for each plane, so that d = n . C - offset."""
+        """n . X0 for each plane, so that d = n . C - offset (computed once: the time loop
+        reads it every step)."""
         return np.einsum("kd,kd->k", self.normals, self.points)
 
     def distances(self, pos: np.ndarray) -> np.ndarray:
