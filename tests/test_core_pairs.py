@@ -17,7 +17,8 @@ from conftest import make_sim, write_case
 from core_cases import BLOB
 
 from sphcore.corrections import neighbour_sums
-from sphcore.equations import PAIRS_PARALLEL_MIN, Fields, WallTerms, _complete_at_wall, sph_rates
+from sphcore.equations import PAIRS_PARALLEL_MIN, Fields, WallTerms, sph_rates
+from sphcore.wall_completion import _complete_at_wall
 from sphcore.kernels import kernel_f, kernel_w
 from sphcore.neighbours import CellGrid
 

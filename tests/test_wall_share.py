@@ -263,7 +263,12 @@ def test_random_convex_domains_2d(data):
 @given(st.data())
 def test_random_convex_domains_3d(data):
     nrm, off, kid = _domain(3, data.draw)
-    check(np.zeros(3), nrm, off, kid, 160, TOL_3D)
+    # the reference's columns run along z: a plane at a shallow angle to them cuts each
+    # column in a staircase, and 160 columns are not enough (n_z = 0.124: the reference
+    # is off by 1.1e-4 at 160 columns, 1.7e-5 at 320, 9e-7 at 640; the closed form is the
+    # limit). Shallow planes get 640 columns (1.3 s instead of 0.07 s).
+    ncol = 160 if np.abs(nrm[:, -1]).min() >= 0.3 else 640
+    check(np.zeros(3), nrm, off, kid, ncol, TOL_3D)
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -7,7 +7,7 @@ each particle's kernel support, computed from the wall planes (``share.wall_term
 forms for planes, corners and wedges of any angle, 2D and 3D): the share s, its gradient G,
 the hydrostatic moment T g, and the projector onto the near walls' normals
 (``normals.near_wall_projector``). The core completes the sums with them
-(:func:`sphcore.equations._complete_at_wall`):
+(:func:`sphcore.wall_completion._complete_at_wall`):
 
     drho_i/dt = sum_j m_j v_ij . grad W_ij + 2 rho_i v_i . G_w
     dv_i/dt   = g - sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad W_ij
