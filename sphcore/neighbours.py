@@ -185,47 +185,63 @@ def _lower_bound(a, m, x):
     return lo
 
 
+PARALLEL_CELLS = 4096  # occupied cells: the neighbour table is built in parallel above
+TABLE_CHUNK = 256  # cells per task of the neighbour table
+
+
 def _neighbour_table(cell_key, m, ncell, dim, reach, nbr):
     """nbr[c, q]: the occupied cell at stencil offset q of cell c, or -1; offsets -reach ..
-    reach per axis (compiled twice: serial below PARALLEL_CELLS occupied cells)."""
+    reach per axis (compiled twice: serial below PARALLEL_CELLS occupied cells).
+
+    For each row of w = 2 reach + 1 cells along the minor axis the first key wanted grows
+    with c, so within a chunk of cells one pointer per row walks forward (a merge); a
+    binary search starts it, and restarts it where the wanted key went back (a clamp at the
+    edge of the grid)."""
     w = 2 * reach + 1
     nq = w ** dim
+    nrow = nq // w
     nminor = ncell[dim - 1]
-    for c in prange(m):
-        # the cell's coordinates, major axis first
-        k = cell_key[c]
-        x_minor = k % nminor
-        k //= nminor
-        x_mid = 0
-        if dim == 3:
-            x_mid = k % ncell[1]
-            k //= ncell[1]
-        x_major = k
-        for q in range(nq):
-            nbr[c, q] = -1
-        # one binary search per row of w cells along the minor axis
-        for row in range(nq // w):
-            o_major = row // w - reach if dim == 3 else row - reach
-            o_mid = row % w - reach if dim == 3 else 0
-            a = x_major + o_major
-            b = x_mid + o_mid
-            if a < 0 or a >= ncell[0] or (dim == 3 and (b < 0 or b >= ncell[1])):
-                continue
-            base = (a * ncell[1] + b if dim == 3 else a) * nminor
-            p = _lower_bound(cell_key, m, base + max(x_minor - reach, 0))
-            for off in range(-reach, reach + 1):
-                x = x_minor + off
-                if x < 0 or x >= nminor:
+    for ch in prange((m + TABLE_CHUNK - 1) // TABLE_CHUNK):
+        ptr = np.full(nrow, -1, np.int64)
+        for c in range(ch * TABLE_CHUNK, min(m, (ch + 1) * TABLE_CHUNK)):
+            # the cell's coordinates, major axis first
+            k = cell_key[c]
+            x_minor = k % nminor
+            k //= nminor
+            x_mid = 0
+            if dim == 3:
+                x_mid = k % ncell[1]
+                k //= ncell[1]
+            x_major = k
+            for q in range(nq):
+                nbr[c, q] = -1
+            for row in range(nrow):
+                o_major = row // w - reach if dim == 3 else row - reach
+                o_mid = row % w - reach if dim == 3 else 0
+                a = x_major + o_major
+                b = x_mid + o_mid
+                if a < 0 or a >= ncell[0] or (dim == 3 and (b < 0 or b >= ncell[1])):
                     continue
-                want = base + x
-                while p < m and cell_key[p] < want:
+                base = (a * ncell[1] + b if dim == 3 else a) * nminor
+                start = base + max(x_minor - reach, 0)
+                p = ptr[row]
+                if p < 0 or (p > 0 and cell_key[p - 1] >= start):
+                    p = _lower_bound(cell_key, m, start)
+                while p < m and cell_key[p] < start:
                     p += 1
-                if p < m and cell_key[p] == want:
-                    nbr[c, row * w + off + reach] = p
+                ptr[row] = p
+                for off in range(-reach, reach + 1):
+                    x = x_minor + off
+                    if x < 0 or x >= nminor:
+                        continue
+                    want = base + x
+                    while p < m and cell_key[p] < want:
+                        p += 1
+                    if p < m and cell_key[p] == want:
+                        nbr[c, row * w + off + reach] = p
 
 
 _table_serial, _table_parallel = serial_and_parallel(_neighbour_table)
-PARALLEL_CELLS = 4096
 
 
 @njit(cache=True)
