@@ -9,7 +9,7 @@ the cells that hold particles are kept (``cell_start``: CSR offsets, cell c hold
 ``order[cell_start[c]:cell_start[c+1]]``), so a few particles far from the rest cost a few
 cells, not a grid over the whole box. For every occupied cell the table ``nbr``
 (m, (2 reach + 1)^dim) lists its occupied neighbour cells within ``reach`` cells per axis
-(-1: empty or outside), found once per build by binary search over the keys; every kernel
+(-1: empty or outside), found once per build by a merge over the sorted keys; every kernel
 walks the neighbours through it:
 
     c = cell_of(grid, i)
