@@ -112,10 +112,10 @@ def _neighbour_table(cell_key, m, ncell, dim, reach, nbr):
     """nbr[c, q]: the occupied cell at stencil offset q of cell c, or -1; offsets -reach ..
     reach per axis (compiled twice: serial below PARALLEL_CELLS occupied cells).
 
-    For each row of w = 2 reach + 1 cells along the minor axis the first key wanted grows
-    with c, so within a chunk of cells one pointer per row walks forward (a merge); a
-    binary search starts it, and restarts it where the wanted key went back (a clamp at the
-    edge of the grid)."""
+    For each row of w = 2 reach + 1 cells along the minor axis the first key wanted never
+    decreases as c grows, so within a chunk of cells one pointer per row walks forward (a
+    merge); a binary search starts it in each chunk (and would restart it, were the wanted
+    key ever to go back: a guard, not a path taken)."""
     w = 2 * reach + 1
     nq = w ** dim
     nrow = nq // w

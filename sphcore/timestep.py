@@ -6,7 +6,7 @@ Fixed, or adaptive with three limits (Monaghan 1992; Morris et al. 1997):
               force_factor * sqrt(h / |a|max),       force
               viscous_factor * h^2 / nu )            viscous (only when nu > 0)
 
-with the constants from the case's [time] table (defaults cfl = 0.4, force_factor = 0.25,
+with the constants from the case's [time] table (defaults cfl = 0.3, force_factor = 0.25,
 viscous_factor = 0.125). A limit whose denominator is zero does not apply. Plugins may
 lower dt through the ``sph_max_dt`` hook.
 """

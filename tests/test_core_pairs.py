@@ -109,14 +109,29 @@ def _reference(n_dest, src, prm, L, wall):
     return acc, drho
 
 
+def _padded(src, n_far, support):
+    """src with n_far extra sources far from every particle: they interact with nothing,
+    but push the pair loop onto its parallel branch (PAIRS_PARALLEL_MIN particles)."""
+    dim = src.pos.shape[1]
+    far = 100.0 * support + np.arange(n_far)[:, None] * 3.0 * support * np.ones((1, dim))
+    extra = (far, np.zeros((n_far, dim)), np.full(n_far, 1000.0), np.zeros(n_far), np.full(n_far, 1e-3))
+    return Fields(*(np.ascontiguousarray(np.concatenate([a, b])) for a, b in zip(src, extra)))
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("kernel_gradient", [False, True])
 @pytest.mark.parametrize("walls", [False, True])
-def test_pair_loop_equals_the_gather_of_every_term(tmp_path, dim, kernel_gradient, walls):
+@pytest.mark.parametrize("branch", ["serial", "parallel"])
+def test_pair_loop_equals_the_gather_of_every_term(tmp_path, dim, kernel_gradient, walls, branch):
     n_dest, src, cells, prm, L, wall = _setup(tmp_path, dim, 7 + dim, kernel_gradient, walls)
+    if branch == "parallel":
+        src = _padded(src, PAIRS_PARALLEL_MIN, prm.support)
+        cells = CellGrid(src.pos, prm.support)
+        assert src.pos.shape[0] >= PAIRS_PARALLEL_MIN
     acc = np.zeros((n_dest, dim))
     drho = np.zeros(n_dest)
-    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 6)), numba.get_num_threads())
+    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 6)),
+              numba.get_num_threads())
     ref_acc, ref_drho = _reference(n_dest, src, prm, L, wall)
     assert np.abs(acc - ref_acc).max() <= 1e-11 * np.abs(ref_acc).max()
     assert np.abs(drho - ref_drho).max() <= 1e-11 * np.abs(ref_drho).max()
@@ -141,19 +156,23 @@ def test_pair_forces_are_equal_and_opposite(tmp_path, dim):
 @pytest.mark.parametrize("dim", [2, 3])
 def test_result_does_not_depend_on_the_thread_count(tmp_path, dim):
     """Slabs of one parity run in parallel; the order of the additions to a particle is set
-    by the slabs alone, so one thread and two give the same bits."""
+    by the slabs alone, so one thread and two give the same bits, and so does a thread
+    count passed to the kernel that differs from numba's (it only assigns slabs to threads)."""
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("numba is limited to one thread here (NUMBA_NUM_THREADS)")
     n_dest, src, cells, prm, L, wall = _setup(tmp_path, dim, 11, True, True, side=48 if dim == 2 else 13)
+    assert src.pos.shape[0] >= PAIRS_PARALLEL_MIN  # large enough for the parallel pair loop
+    assert len(cells.slab_start) - 1 >= 4  # at least two slabs in each phase
     out = []
     before = numba.get_num_threads()
     try:
-        for threads in (1, before):
+        for threads, nth in ((1, 1), (2, 2), (2, 5)):
             numba.set_num_threads(threads)
             acc = np.zeros((n_dest, dim))
             drho = np.zeros(n_dest)
-            sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 6)), threads)
+            sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 6)), nth)
             out.append((acc, drho))
     finally:
         numba.set_num_threads(before)
-    assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
-    assert len(cells.slab_start) > 3  # several slabs, so both phases ran more than one
-    assert src.pos.shape[0] >= PAIRS_PARALLEL_MIN  # large enough for the parallel pair loop
+    for acc, drho in out[1:]:
+        assert np.array_equal(out[0][0], acc) and np.array_equal(out[0][1], drho)

@@ -127,7 +127,7 @@ def test_v_tank_sloped_walls_hold_every_particle():
 def test_time_step_past_the_stability_limit_is_caught_by_energy_growth():
     """cfl = 0.6 (the leapfrog's limit lies between 0.45 and 0.5, docs/speed_accuracy.md)
     runs without NaN or density out of bounds for a long time while the field is already
-    garbage; the energy check stops it within the first 0.01 s. At the default cfl = 0.4 the
+    garbage; the energy check stops it within the first 0.01 s. At the default cfl = 0.3 the
     energy stays two orders of magnitude below the threshold."""
     from sphcore.errors import Instability
 
