@@ -32,6 +32,7 @@ class PressureField:
     def __init__(self, prm):
         self.prm = prm
         self.p_dyn = np.zeros(0)
+        self._z = np.zeros(0)  # scratch: height of each particle (m)
 
     def force_pressure(self, state) -> np.ndarray:
         """The pressure array the momentum equation uses (Pa)."""
@@ -48,7 +49,14 @@ class PressureField:
             return
         eos.fill_pressure(state.rho, prm.rho0, prm.c0, prm.gamma, prm.p_background, self.force_pressure(state))
         if prm.modified_pressure:
-            state.p[:] = self.p_dyn + prm.rho0 * prm.g_abs * (prm.surface_level - state.pos @ prm.up)
+            # p = P + rho0 g (surface - z), in place (this runs twice a step)
+            if self._z.shape[0] != state.n:
+                self._z = np.zeros(state.n)
+            z = self._z
+            np.matmul(state.pos, prm.up, out=z)
+            np.subtract(prm.surface_level, z, out=z)
+            z *= prm.rho0 * prm.g_abs
+            np.add(self.p_dyn, z, out=state.p)
         counters["eos"] += 1
 
 

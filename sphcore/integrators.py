@@ -88,6 +88,7 @@ class _Scheme:
             self.acc = np.zeros((n, dim))
             self.drho = np.zeros(n)
             self.pos0 = np.zeros((n, dim))
+            self._drho_spare = np.zeros(n)
             self._extra_arrays(n, dim)
             self.fresh = False
 
@@ -95,9 +96,12 @@ class _Scheme:
         pass
 
     def permute(self, order):
-        """Follow a reordering of the particles (the rates move with them)."""
-        self.acc[:] = self.acc[order]
-        self.drho[:] = self.drho[order]
+        """Follow a reordering of the particles (the rates move with them): gathered into
+        the scratch arrays, which then swap roles (no allocation)."""
+        np.take(self.acc, order, axis=0, out=self.pos0, mode="clip")  # pos0: rewritten by every drift
+        self.acc, self.pos0 = self.pos0, self.acc
+        np.take(self.drho, order, out=self._drho_spare, mode="clip")  # "raise" would buffer
+        self.drho, self._drho_spare = self._drho_spare, self.drho
 
     def invalidate(self):
         """The state changed outside a step (density filter): recompute rates first."""

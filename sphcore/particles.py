@@ -46,7 +46,7 @@ class ParticleState:
             spare = spares.get(name)
             if spare is None or spare.shape != a.shape or spare.dtype != a.dtype:
                 spare = np.empty_like(a)
-            np.take(a, order, axis=0, out=spare)
+            np.take(a, order, axis=0, out=spare, mode="clip")  # "raise" would buffer: allocate
             setattr(self, name, spare)
             spares[name] = a
 
