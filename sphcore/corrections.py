@@ -27,8 +27,6 @@ def _corrected(L, n_L, i, j, g0, g1, g2):
 
 @njit(cache=True)
 def _apply(L, n_L, row, g0, g1, g2):
-    # separate calls for i and j: the parfor index and j have different integer types,
-    # and a conditional expression over both would unify them to float64
     if row >= n_L:
         return g0, g1, g2
     return (L[row, 0, 0] * g0 + L[row, 0, 1] * g1 + L[row, 0, 2] * g2,

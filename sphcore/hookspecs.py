@@ -102,9 +102,9 @@ def sph_wall_terms(ctx, terms):
     the walls within each particle's support, ``terms.fill`` (n,) the neighbour sum
     sum_j V_j W_ij a particle of the initial lattice has at that place (the core scales the
     completion by the particle's own sum over it; leave 0 for no scaling). Add (``+=``) what
-    your walls contribute to share, grad, hydro and fill, and widen the projector to your walls' normals, so that several wall
-    plugins combine. The core then completes the continuity and momentum sums with them
-    (see :mod:`sphcore.equations`).
+    your walls contribute to share, grad, hydro and fill, and widen the projector to your
+    walls' normals, so that several wall plugins combine. The core then completes the
+    continuity and momentum sums with them (see :mod:`sphcore.wall_completion`).
     """
 
 

@@ -44,22 +44,6 @@ def kernel_w(kernel_id, r, h, dim):
 
 
 @njit(cache=True, inline="always")
-def kernel_f(kernel_id, r, h, dim):
-    """F = (1/r) dW/dr in 1/m^(dim+2); grad_i W_ij = F * (x_i - x_j)."""
-    q = r / h
-    s = _sigma(kernel_id, dim) / h ** (dim + 2)
-    if kernel_id == CUBIC_SPLINE:
-        if q < 1.0:
-            return s * (-3.0 + 2.25 * q)
-        if q < 2.0:
-            return -s * 0.75 * (2.0 - q) ** 2 / q
-        return 0.0
-    if q < 2.0:
-        return -5.0 * s * (1.0 - 0.5 * q) ** 3
-    return 0.0
-
-
-@njit(cache=True, inline="always")
 def kernel_f_scale(kernel_id, h, dim):
     """The factor sigma / h^(dim+2) of F, so that F(r) = kernel_f_scale * kernel_f_of_q(q),
     q = r / h: loops over pairs compute it once."""
@@ -68,7 +52,7 @@ def kernel_f_scale(kernel_id, h, dim):
 
 @njit(cache=True, inline="always")
 def kernel_f_of_q(kernel_id, q):
-    """F in units of sigma / h^(dim+2) as a function of q = r / h (no division)."""
+    """F in units of sigma / h^(dim+2) as a function of q = r / h (no division by h)."""
     if kernel_id == CUBIC_SPLINE:
         if q < 1.0:
             return -3.0 + 2.25 * q
@@ -79,6 +63,12 @@ def kernel_f_of_q(kernel_id, q):
         t = 1.0 - 0.5 * q
         return -5.0 * t * t * t
     return 0.0
+
+
+@njit(cache=True, inline="always")
+def kernel_f(kernel_id, r, h, dim):
+    """F = (1/r) dW/dr in 1/m^(dim+2); grad_i W_ij = F * (x_i - x_j)."""
+    return kernel_f_scale(kernel_id, h, dim) * kernel_f_of_q(kernel_id, r / h)
 
 
 def lattice_moment(kernel_id: int, h: float, dx: float, dim: int) -> float:

@@ -54,8 +54,8 @@ class Grid(NamedTuple):
 
     ``order`` (n,) particle indices grouped by cell; ``cell_start`` (m + 1,) CSR offsets of
     the m occupied cells; ``pcell`` (n,) the occupied cell of each particle; ``nbr``
-    (m, (2 reach + 1)**dim) occupied neighbour cells (-1: none); ``slab_start`` (nslab + 1,) cell
-    offsets of the slabs of the pair loop; ``lo`` (3,) lower corner (m) and ``cell_size`` (m).
+    (m, (2 reach + 1)**dim) occupied neighbour cells (-1: none); ``slab_start``
+    (nslab + 1,) cell offsets of the slabs of the pair loop.
     """
 
     order: np.ndarray
@@ -63,8 +63,6 @@ class Grid(NamedTuple):
     pcell: np.ndarray
     nbr: np.ndarray
     slab_start: np.ndarray
-    lo: np.ndarray
-    cell_size: float
 
 
 @njit(cache=True, inline="always")
@@ -129,8 +127,8 @@ class CellGrid:
                                                           (self._key, self._order, self._tmp, self._pcell))
         self._cell_key, self._start = _grow(self._cell_key, n + 1), _grow(self._start, n + 1)
         ncell, axes = self._ncell[:dim], self._axes[:dim]
-        m, nslab = _build(pos, self.cell_size, self.reach, self.lo, ncell, axes, self._key[:n], self._order[:n], self._tmp[:n],
-                          self._count, self._pcell[:n], self._cell_key, self._start, self._slab)
+        m, nslab = _build(pos, self.cell_size, self.reach, self.lo, ncell, axes, self._key[:n], self._order[:n],
+                          self._tmp[:n], self._count, self._pcell[:n], self._cell_key, self._start, self._slab)
         if m == -2:
             raise OverflowError("non-finite particle positions")
         if m == -1:
@@ -142,13 +140,8 @@ class CellGrid:
         self.cell_key, self.cell_start, self.nbr = self._cell_key[:m], self._start[:m + 1], self._nbr[:m]
         (_table_parallel if m > PARALLEL_CELLS else _table_serial)(self.cell_key, m, ncell, dim, self.reach, self.nbr)
         self.slab_start = self._slab[:nslab + 1]
-        self.view = Grid(self.order, self.cell_start, self.pcell, self.nbr, self.slab_start, self.lo, self.cell_size)
+        self.view = Grid(self.order, self.cell_start, self.pcell, self.nbr, self.slab_start)
         return self
-
-    @property
-    def cell(self) -> np.ndarray:
-        """(n,) the occupied cell of each particle (same as ``pcell``)."""
-        return self.pcell
 
 
 @njit(cache=True)

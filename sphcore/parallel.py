@@ -4,7 +4,10 @@ A numba kernel whose outer loop is a ``prange`` over particles can run in parall
 compiled without ``parallel=True``, as a plain loop. A parallel launch costs ~10-20 us on
 a quiet machine and far more when the machine is shared (a per-step kernel of 2,592
 particles took 0.58 ms with two threads under load, 0.05 ms with one); below
-``PARALLEL_MIN`` particles the serial build runs. Both builds give identical results: the
+``PARALLEL_MIN`` particles the serial build runs. Measure before using it: numba's serial
+build of a kernel with a large, rarely taken branch (the wall model's per-particle terms)
+ran 4x slower per particle than its parallel build even on one thread, so those kernels
+stay ``parallel=True``. Both builds give identical results: the
 loop bodies are independent per particle (a ``+=`` reduction over the loop is summed in
 integers or compared, never accumulated in floating point across threads).
 

@@ -37,10 +37,10 @@ def brute_force_pairs(pos: np.ndarray, radius: float) -> set[tuple[int, int]]:
     return out
 
 
-def grid_pairs(pos: np.ndarray, cell_size: float, radius: float, reach: int = 1):
-    """Pairs within ``radius`` from a grid built for the search radius ``cell_size``
-    (cells of side cell_size / reach)."""
-    grid = CellGrid(pos, cell_size, reach)
+def grid_pairs(pos: np.ndarray, search_radius: float, radius: float, reach: int = 1):
+    """Pairs within ``radius`` from a grid built for ``search_radius`` (cells of side
+    search_radius / reach)."""
+    grid = CellGrid(pos, search_radius, reach)
     pi, pj = neighbour_pairs(pos, grid.view, radius)
     pairs = list(zip(pi.tolist(), pj.tolist()))
     assert len(pairs) == len(set(pairs)), "a pair was reported twice"
@@ -114,7 +114,7 @@ def test_all_particles_in_one_cell(dim, seed, n):
     pos = np.random.default_rng(seed).uniform(0.0, 0.99 * cs, size=(n, dim))
     pairs, grid = grid_pairs(pos, cs, cs, reach=1)
     assert int(np.prod(grid.ncell)) == 1
-    assert np.all(grid.cell == 0)
+    assert np.all(grid.pcell == 0)
     assert pairs == brute_force_pairs(pos, cs)
     # every pair within one cell of side cs is closer than sqrt(dim) cs; all closer than cs found
     assert len(pairs) == len(brute_force_pairs(pos, cs))
@@ -146,12 +146,12 @@ def test_sort_is_a_stable_permutation_grouped_by_occupied_cell(data, reach):
     assert np.all(np.diff(grid.cell_start) > 0)
     assert np.all(np.diff(grid.cell_key) > 0)
     # each cell's slice holds exactly its particles, in their original order (stable sort)
-    assert np.all(np.diff(grid.cell[grid.order]) >= 0)
+    assert np.all(np.diff(grid.pcell[grid.order]) >= 0)
     for c in range(m):
         members = grid.order[grid.cell_start[c]:grid.cell_start[c + 1]]
-        assert members.tolist() == np.flatnonzero(grid.cell == c).tolist()
+        assert members.tolist() == np.flatnonzero(grid.pcell == c).tolist()
     # each particle's cell contains it (up to the clamp of the last cell and round-off)
-    idx = cell_coords(grid, dim)[grid.cell]
+    idx = cell_coords(grid, dim)[grid.pcell]
     lo_corner = grid.lo[:dim] + idx * cs
     tol = 1e-9 * (1.0 + np.abs(pos))
     assert np.all(pos >= lo_corner - tol)

@@ -157,8 +157,8 @@ def test_a_column_along_a_side_wall_is_held_up_as_the_interior(tmp_path, h_over_
 def test_a_lone_particle_near_a_wall_gets_no_wall_completion(tmp_path):
     """A splash particle 1.5 dx above the floor with no neighbours, moving away from the
     wall at 2 m/s under a 5 kPa pressure: the mirror image of its (empty) neighbourhood is
-    empty, so the wall neither pushes it nor changes its density (acceleration g, drho/dt
-    0). With the lattice's wall gradient applied in full it lost density at about
+    empty, so the wall neither pushes it nor changes its density (acceleration g, zero in
+    this box; drho/dt 0). With the lattice's wall gradient applied in full it lost density at about
     2 rho v |G| ~ 10^5 kg/m^3/s (a Lobovsky splash particle fell below 0.5 rho0)."""
     text = BOX.format(dim=2, lo=[0.0, 0.0], hi=[0.2, 0.2], use='["reflective", "wall_integral"]')
     text = text.replace("max = [0.2, 0.2]\n[particles]", "max = [0.02, 0.02]\n[particles]")
@@ -178,9 +178,10 @@ def test_a_lone_particle_near_a_wall_gets_no_wall_completion(tmp_path):
 
 def test_water_does_not_cling_to_the_back_wall_with_the_wall_model(tmp_path):
     """The seed's dam break at half its resolution (dx = 0.114 m / 18, 648 particles, 0.3 s):
-    the residual column height at the back wall against Martin & Moyce is 7.3% RMS with the
-    wall model and 27.0% with the reflective walls alone, whose truncated kernel lets the
-    water cling to the wall (at the case's resolution: 4.6% and 18.4%)."""
+    the residual column height at the back wall against Martin & Moyce is 7.5% RMS with the
+    wall model and 25.7% with the reflective walls alone (default CFL 0.3; 7.3% and 27.0% at
+    CFL 0.2), whose truncated kernel lets the water cling to the wall (at the case's
+    resolution: 4.8% and 23.2%)."""
     from pathlib import Path
 
     case = Path(__file__).resolve().parent.parent / "cases" / "dam_break"

@@ -120,6 +120,15 @@ def _interp(nodes, tab, m, d0, d1, d2, col):
     return v
 
 
+@njit(cache=True, inline="always")
+def _normal_part(normals, k, v, dim):
+    """n_k . v, the component of v along plane k's normal."""
+    c = normals[k, 0] * v[0] + normals[k, 1] * v[1]
+    if dim == 3:
+        c += normals[k, 2] * v[2]
+    return c
+
+
 @njit(cache=True, parallel=True)
 def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad, hydro,
                            fill):
@@ -171,9 +180,7 @@ def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, suppo
             g0, g1, g2 = gravity[0], gravity[1], gravity[2]
             for a in range(cnt):
                 k = k0 if a == 0 else (k1 if a == 1 else k2)
-                gn = normals[k, 0] * gravity[0] + normals[k, 1] * gravity[1]
-                if dim == 3:
-                    gn += normals[k, 2] * gravity[2]
+                gn = _normal_part(normals, k, gravity, dim)
                 g0 -= gn * normals[k, 0]
                 g1 -= gn * normals[k, 1]
                 if dim == 3:
@@ -193,9 +200,7 @@ def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, suppo
                     e = _interp(nodes, tab1, 1, d, 0.0, 0.0, 0)
                     f = _interp(nodes, tab1, 1, d, 0.0, 0.0, 1) / lam
                     gam -= full - _interp(nodes, tab1, 1, d, 0.0, 0.0, 2)
-                    gn = 0.0
-                    for a in range(dim):
-                        gn += normals[k, a] * gravity[a]
+                    gn = _normal_part(normals, k, gravity, dim)
                     for a in range(dim):
                         grad[i, a] -= e * normals[k, a]
                         hydro[i, a] -= f * (gravity[a] - gn * normals[k, a])
