@@ -19,9 +19,11 @@ import numpy as np
 
 from . import defaults
 from .errors import CaseError
+from .faces import Faces
 from .geometry import Planes, recession_direction
 from .options import check_value, validate_table
 from .overrides import fold, parse_set
+from .walls import parse_walls
 
 CASE_FILE = "case.toml"
 
@@ -35,6 +37,11 @@ class Case:
     config: dict
     planes: Planes
     blocks: list = field(default_factory=list)
+    faces: Faces | None = None  # finite walls ([[domain.walls]]); None or empty without
+
+    def __post_init__(self):
+        if self.faces is None:
+            self.faces = Faces.empty(self.planes.normals.shape[1] if self.planes.count else self.dim)
 
     @property
     def dim(self) -> int:
@@ -151,7 +158,7 @@ def _vector(file, key, value, dim, allow_longer=False):
     return np.asarray(value[:dim], float)
 
 
-def _planes(file, cfg, dim) -> Planes:
+def _planes(file, cfg, dim, bounded_by_walls=False) -> Planes:
     dom = cfg["domain"]
     normals, points = [], []
     if (dom["min"] is None) != (dom["max"] is None):
@@ -173,10 +180,13 @@ def _planes(file, cfg, dim) -> Planes:
         normals.append(n / np.linalg.norm(n))
         points.append(_vector(file, f"{key}.point", e["point"], dim))
     if not normals:
-        raise CaseError(file, "domain", "no wall planes: give domain.min/max or [[domain.planes]]")
+        if bounded_by_walls:
+            return Planes(np.zeros((0, dim)), np.zeros((0, dim)))
+        raise CaseError(file, "domain", "no walls: give domain.min/max, [[domain.planes]] or a closed "
+                        "[[domain.walls]] entry with fluid = \"inside\"")
     planes = Planes.from_lists(normals, points)
     u = recession_direction(planes.normals)
-    if u is not None:
+    if u is not None and not bounded_by_walls:
         raise CaseError(file, "domain.planes", f"the planes bound no region: it is open along {(np.round(u, 6) + 0.0).tolist()}")
     return planes
 
@@ -228,9 +238,12 @@ def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
         raise CaseError(file, "physics.gravity", f"expected at least {dim} components")
     if cfg["checks"]["rho_min"] >= cfg["checks"]["rho_max"]:
         raise CaseError(file, "checks.rho_max", "expected a value above checks.rho_min")
-    planes = _planes(file, cfg, dim)
+    faces = parse_walls(file, cfg["domain"]["walls"], dim, Path(file).parent)
+    tank = any(sign < 0 for _, _, sign in faces.groups)
+    planes = _planes(file, cfg, dim, bounded_by_walls=tank)
     blocks = _blocks(file, cfg, dim)
-    return Case(file=Path(file), dir=Path(file).parent, config=cfg, planes=planes, blocks=blocks)
+    return Case(file=Path(file), dir=Path(file).parent, config=cfg, planes=planes, blocks=blocks,
+                faces=faces)
 
 
 def case_file(case_dir) -> Path:

@@ -18,6 +18,8 @@ CORE: dict[str, dict[str, O]] = {
         "min": O(None, "vector", "m", "lower corner of an axis-aligned box of wall planes (optional)", nullable=True),
         "max": O(None, "vector", "m", "upper corner of that box", nullable=True),
         "planes": O([], "table_list", doc="extra wall planes: {normal = [...], point = [...]}; the normal points into the fluid"),
+        "walls": O([], "table_list", doc="finite walls: boxes, polygons, polylines and mesh files (keys: WALL); "
+                   "obstacles inside the planes' region, or a closed tank of their own"),
     },
     # [[blocks]] is an array of tables; each entry is checked against BLOCK below.
     "blocks": O([], "table_list", doc="particle blocks filled on a lattice of spacing dx"),
@@ -115,6 +117,19 @@ BLOCK: dict[str, O] = {
     "count": O(None, "list", doc="particles per axis instead of max (e.g. [36, 71])", nullable=True),
     "velocity": O(None, "vector", "m/s", "initial velocity; zero when unset", nullable=True),
     "kind": O("fluid", "str", doc="fluid (SPH) or sphere (rigid, only moved by integration)", choices=("fluid", "sphere")),
+}
+
+#: keys of one ``[[domain.walls]]`` entry
+WALL: dict[str, O] = {
+    "shape": O(None, "str", doc="box, polygon (2D), polyline (an open thin wall) or mesh (a file)",
+               choices=("box", "polygon", "polyline", "mesh"), nullable=True),
+    "min": O(None, "vector", "m", "box: lower corner", nullable=True),
+    "max": O(None, "vector", "m", "box: upper corner", nullable=True),
+    "points": O(None, "list", "m", "polygon, polyline: the vertices in order ([[x, y], ...])", nullable=True),
+    "file": O(None, "str", doc="mesh: a file meshio reads (STL, OBJ, VTU/VTK, PLY), relative to the case "
+              "directory; 3D: triangles or polygons, 2D: lines or a triangulated region", nullable=True),
+    "fluid": O("outside", "str", doc="closed walls: where the fluid is: outside (an obstacle) or inside "
+               "(the walls are the tank)", choices=("outside", "inside")),
 }
 
 #: keys of one ``[[domain.planes]]`` entry

@@ -25,6 +25,9 @@ class ParticleState:
     radius: np.ndarray
     kind: np.ndarray
     id: np.ndarray
+    #: particles of the blocks not created because a finite wall covers them (not a field:
+    #: no array, not saved; set by the filling)
+    removed_by_walls = 0
 
     @property
     def n(self) -> int:

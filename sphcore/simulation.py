@@ -29,21 +29,40 @@ KIND_CODES = {"fluid": FLUID, "sphere": SPHERE}  # case.toml block kind -> state
 INSIDE_TOL = 1e-9  # relative to the radius: a particle at d = r - ulp still counts as inside
 
 
+def block_positions(case, k, b):
+    """Centres of block k: its lattice, less the particles a finite wall removes (closer
+    than a radius to a face, or in a solid); (positions, removed count). A centre beyond
+    a wall plane is an error naming the block."""
+    dx, r = case.dx, case.radius
+    pos = lattice(b["min"], b["max"], dx, b["count"])
+    if pos.shape[0] == 0:
+        raise CaseError(case.file, f"blocks[{k}]", f"the block holds no particle at dx = {dx} m")
+    d = case.planes.distances(pos)
+    bad = np.argwhere(d < r * (1.0 - INSIDE_TOL))
+    if bad.size:
+        i, p = bad[0]
+        raise CaseError(case.file, f"blocks[{k}]", f"particle at {pos[i].round(9).tolist()} is outside wall plane {p} "
+                        f"(distance {d[i, p]:.6g} m < radius {r:.6g} m)")
+    if case.faces.count == 0:
+        return pos, 0
+    keep = (case.faces.distances(pos) >= r * (1.0 - INSIDE_TOL)) & case.faces.in_fluid(pos)
+    if not keep.any():
+        raise CaseError(case.file, f"blocks[{k}]", "every particle of the block lies in a solid wall or "
+                        "closer than a radius to a wall face")
+    return np.ascontiguousarray(pos[keep]), int(pos.shape[0] - keep.sum())
+
+
 def build_state(case) -> ParticleState:
-    """Particles of every [[blocks]] entry; each must lie inside every wall plane."""
-    dx, r, rho0 = case.dx, case.radius, case.config["fluid"]["rho0"]
+    """Particles of every [[blocks]] entry; each must lie inside every wall plane, and those a
+    finite wall covers are not created (``state.removed_by_walls`` counts them)."""
+    r, rho0 = case.radius, case.config["fluid"]["rho0"]
     state = ParticleState.empty(case.dim)
+    removed = 0
     for k, b in enumerate(case.blocks):
-        pos = lattice(b["min"], b["max"], dx, b["count"])
-        if pos.shape[0] == 0:
-            raise CaseError(case.file, f"blocks[{k}]", f"the block holds no particle at dx = {dx} m")
-        d = case.planes.distances(pos)
-        bad = np.argwhere(d < r * (1.0 - INSIDE_TOL))
-        if bad.size:
-            i, p = bad[0]
-            raise CaseError(case.file, f"blocks[{k}]", f"particle at {pos[i].round(9).tolist()} is outside wall plane {p} "
-                            f"(distance {d[i, p]:.6g} m < radius {r:.6g} m)")
-        state.append(make_block(pos, b["velocity"], rho0, dx, r, KIND_CODES[b["kind"]]))
+        pos, m = block_positions(case, k, b)
+        removed += m
+        state.append(make_block(pos, b["velocity"], rho0, case.dx, r, KIND_CODES[b["kind"]]))
+    state.removed_by_walls = removed
     return state
 
 
@@ -55,8 +74,8 @@ def block_tops(case, state) -> np.ndarray:
     z = state.pos @ up
     tops = np.empty(state.n)
     start = 0
-    for b in case.blocks:
-        n_b = lattice(b["min"], b["max"], case.dx, b["count"]).shape[0]
+    for k, b in enumerate(case.blocks):
+        n_b = block_positions(case, k, b)[0].shape[0]
         tops[start:start + n_b] = z[start:start + n_b].max() + 0.5 * case.dx
         start += n_b
     return tops

@@ -63,9 +63,9 @@ def test_options_defaults_and_bounds():
     assert all(o.doc for o in opts.values())
 
 
-def test_configure_needs_planes():
+def test_configure_needs_walls():
     pm, _ = manager()
-    with pytest.raises(CaseError, match="wall planes"):
+    with pytest.raises(CaseError, match="needs walls"):
         pm.hook.sph_configure(case=make_case(pm, {}, None))
 
 

@@ -70,6 +70,10 @@ class GhostPlugin:
         file = getattr(case, "file", "case.toml")
         if planes is None or planes.count == 0:
             raise CaseError(file, "plugins.use", "the ghost plugin needs wall planes ([domain] min/max or planes)")
+        faces = getattr(case, "faces", None)
+        if faces is not None and faces.count:
+            raise CaseError(file, "domain.walls", f"the ghost plugin mirrors across wall planes only; the case "
+                            f"has {faces.count} finite wall faces: use reflective (and wall_integral on planes)")
         if planes.count > MAX_PLANES:
             raise CaseError(file, "domain.planes", f"the ghost plugin handles at most {MAX_PLANES} wall planes, "
                             f"got {planes.count}")

@@ -21,8 +21,8 @@ import numpy as np
 
 from sphcore.api import CaseError, Option, hookimpl
 
-from .collision import (TOL_REL, clearance, min_clearance, outside, outside_mask, reflect,
-                        reflect_particles)
+from .collision import (TOL_REL, clearance, face_arrays, min_clearance, outside, outside_mask,
+                        reflect, reflect_particles)
 
 __all__ = ["ReflectivePlugin", "reflect", "reflect_particles", "clearance", "min_clearance",
            "outside", "outside_mask", "TOL_REL"]
@@ -39,6 +39,8 @@ class ReflectivePlugin:
         self.velocity_at_contact = True
         self.normals = np.zeros((0, 0))
         self.offsets = np.zeros(0)
+        self.walls = None  # finite faces (sphcore.faces.Faces) or None
+        self.faces = ()  # their kernel arrays, built at setup (the grid needs the radius)
         # per-particle kernel outputs, resized when the particle count changes
         self._guarded = np.zeros(0, np.int8)
         self._counts = np.zeros(0, np.int32)
@@ -72,16 +74,21 @@ class ReflectivePlugin:
         self.max_reflections = int(cfg["max_reflections"])
         self.velocity_at_contact = cfg["velocity"] == "contact"
         planes = getattr(case, "planes", None)
-        if planes is None or planes.count == 0:
+        faces = getattr(case, "faces", None)
+        if (planes is None or planes.count == 0) and (faces is None or faces.count == 0):
             raise CaseError(getattr(case, "file", "case.toml"), "plugins.use",
-                            "the reflective plugin needs wall planes ([domain] min/max or planes)")
+                            "the reflective plugin needs walls ([domain] min/max, planes or walls)")
         self.normals = np.ascontiguousarray(planes.normals, dtype=np.float64)
         self.offsets = np.ascontiguousarray(planes.offsets, dtype=np.float64)
+        self.walls = faces if faces is not None and faces.count else None
+        self.faces = face_arrays(None, self.normals.shape[1], 1.0)  # the grid comes at setup
 
     @hookimpl
     def sph_setup(self, ctx):
         # The guard relies on every start-of-step position being inside; check the first.
         st = ctx.state
+        if self.walls is not None:  # grid cells four radii wide
+            self.faces = face_arrays(self.walls, self.normals.shape[1], st.radius.max() if st.n else 1.0)
         if st.n == 0:
             return
         bad = outside(st.pos, st.radius, (self.normals, self.offsets))
@@ -109,7 +116,7 @@ class ReflectivePlugin:
             self._guarded = np.zeros(n, np.int8)
             self._counts = np.zeros(n, np.int32)
         guarded = reflect(pos0, pos, vel, acc, ctx.state.radius, self.normals, self.offsets,
-                          self.cr, self.max_reflections, self.velocity_at_contact,
+                          *self.faces, self.cr, self.max_reflections, self.velocity_at_contact,
                           self._guarded, self._counts)
         hit = int(np.count_nonzero(self._counts))
         # ctx.stats: in summary.json under "reflective" and in every checkpoint, so the

@@ -51,7 +51,11 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from sphcore.api import by_size, particle_distance, plane_distance
+from sphcore.api import (build_grid, by_size, cell_span, face_distance, particle_distance,
+                         plane_distance)
+
+from .corner import MAX_ACTIVE, respond
+from .facecontact import contact_normal, earliest_face, empty_grid, near_any_face
 
 #: relative contact allowance: a plane collides only when d < r - TOL_REL * r
 TOL_REL = 1e-9
@@ -64,13 +68,15 @@ def _limit(r):
 
 
 @by_size
-def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
-            velocity_at_contact, guarded_flags, reflection_counts):
+def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
+            gitems, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
     """Reflect every particle that left the domain during a step; return the guard count.
 
     pos0, pos, vel, acc: (n, dim) C-contiguous float64: start and end positions (m),
     end-of-step velocity (m/s), the step's acceleration (m/s^2). radius (n,) m.
     normals (k, dim) unit vectors into the domain, offsets (k,) = n . X0 (m).
+    verts (nf, dim, dim): finite faces (:mod:`sphcore.faces`), with their grid
+    (glo, ginv, gshape, gstart, gitems: :meth:`sphcore.facegrid.FaceGrid.arrays`).
     cr: restitution coefficient (Eq. 2), 0 <= cr <= 1. max_reflections: int >= 0.
     velocity_at_contact: bool, Eq. 2 at the contact point (True) or at the end point.
     guarded_flags (n,) int8 out: 1 where the guard put the particle back at pos0.
@@ -78,27 +84,37 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
     ``pos`` and ``vel`` are changed in place; ``pos0`` and ``acc`` are only read.
     """
     n = pos.shape[0]
+    three = pos.shape[1] == 3
     guarded = 0
     for i in numba.prange(n):
         guarded_flags[i] = 0
         reflection_counts[i] = 0
-        # most particles touch no wall: one cheap pass over the planes decides (the full
-        # loop below, even when it finds nothing, costs ten times more per particle)
+        # most particles touch no wall: one cheap pass over the planes (and the faces
+        # listed near the step) decides; the full loop costs ten times more per particle
         lim = _limit(radius[i])
+        hit = False
         for k in range(normals.shape[0]):
             if particle_distance(normals, offsets, k, pos, i) < lim:
-                g = _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
-                                 velocity_at_contact, guarded_flags, reflection_counts)
-                guarded += g
+                hit = True
                 break
+        if not hit and verts.shape[0]:
+            hit = near_any_face(verts, glo, ginv, gshape, gstart, gitems, pos0[i, 0], pos0[i, 1],
+                                pos0[i, 2] if three else 0.0, pos[i, 0], pos[i, 1],
+                                pos[i, 2] if three else 0.0, lim)
+        if hit:
+            guarded += _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv,
+                                    gshape, gstart, gitems, cr, max_reflections, velocity_at_contact,
+                                    guarded_flags, reflection_counts)
     return guarded
 
 
 @numba.njit(cache=True)
-def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, cr, max_reflections,
-                 velocity_at_contact, guarded_flags, reflection_counts):
+def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
+                 gitems, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
     """The paper's loop for particle i (earliest contact first, until inside or the guard);
-    returns 1 if the guard put it back at pos0, else 0."""
+    returns 1 if the guard put it back at pos0, else 0. Planes and faces compete for the
+    earliest contact; from the third reflection of a step, a contact that touches two or
+    more walls is resolved as one (:mod:`.corner`)."""
     dim = pos.shape[1]
     nplanes = normals.shape[0]
     guarded = 0
@@ -124,7 +140,10 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, cr, max_refle
                     fbest = f
                     best = k
                     dbest = db
-        if best < 0:
+        b2 = pos[i, 2] if dim == 3 else 0.0
+        face, fbest = earliest_face(verts, glo, ginv, gshape, gstart, gitems, a0, a1, a2,
+                                    pos[i, 0], pos[i, 1], b2, r, lim, fbest)
+        if best < 0 and face < 0:
             break
         if count == max_reflections:
             # guard: C0 is inside (the invariant); keep the velocity reflected so far
@@ -133,31 +152,98 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, cr, max_refle
             guarded_flags[i] = 1
             guarded = 1
             break
-        # contact point C0' (Fig. 6): inside every plane, so the invariant holds for A
+        # contact point C0' (Fig. 6): inside every wall, so the invariant holds for A
         a0 += fbest * (pos[i, 0] - a0)
         a1 += fbest * (pos[i, 1] - a1)
         if dim == 3:
             a2 += fbest * (pos[i, 2] - a2)
+        if face >= 0:  # the plane tangent at the contact (see .facecontact)
+            n0, n1, n2, off = contact_normal(verts, face, a0, a1, a2, pos0[i, 0], pos0[i, 1],
+                                             pos0[i, 2] if dim == 3 else 0.0)
+            dbest = plane_distance_n(n0, n1, n2, off, pos[i, 0], pos[i, 1], b2)
+        else:
+            n0 = normals[best, 0]
+            n1 = normals[best, 1]
+            n2 = normals[best, 2] if dim == 3 else 0.0
+        count += 1
+        if count >= 3 and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart,
+                                  gitems, a0, a1, a2, r, cr):
+            continue
         depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
-        u = 0.0
-        an = 0.0
-        for j in range(dim):
-            u += vel[i, j] * normals[best, j]
-            an += acc[i, j] * normals[best, j]
+        u = vel[i, 0] * n0 + vel[i, 1] * n1
+        an = acc[i, 0] * n0 + acc[i, 1] * n1
+        if dim == 3:
+            u += vel[i, 2] * n2
+            an += acc[i, 2] * n2
         if u < 0.0:  # never reverse a particle already moving back in
             if velocity_at_contact:
                 uc2 = max(u * u + 2.0 * an * depth, 0.0)
                 uf = np.sqrt(max(cr * cr * uc2 + 2.0 * an * cr * depth, 0.0))
             else:
                 uf = -cr * u
-            for j in range(dim):
-                vel[i, j] += (uf - u) * normals[best, j]
+            vel[i, 0] += (uf - u) * n0
+            vel[i, 1] += (uf - u) * n1
+            if dim == 3:
+                vel[i, 2] += (uf - u) * n2
         shift = (1.0 + cr) * depth  # |t| of Eq. 1
-        for j in range(dim):
-            pos[i, j] += shift * normals[best, j]
-        count += 1
+        pos[i, 0] += shift * n0
+        pos[i, 1] += shift * n1
+        if dim == 3:
+            pos[i, 2] += shift * n2
     reflection_counts[i] = count
     return guarded
+
+
+@numba.njit(cache=True)
+def plane_distance_n(n0, n1, n2, off, x0, x1, x2):
+    """n . x - off for a plane given by scalars (the tangent plane of a face contact)."""
+    return n0 * x0 + n1 * x1 + n2 * x2 - off
+
+
+@numba.njit(cache=True)
+def _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart, gitems, a0, a1, a2,
+            r, cr):
+    """Resolve the contact at A as one with every wall touching there (:mod:`.corner`) when
+    two or more do; False (nothing changed) otherwise."""
+    dim = pos.shape[1]
+    touch = r * (1.0 + 1e-6)
+    nrm = np.zeros((MAX_ACTIVE, dim))
+    c = np.zeros(MAX_ACTIVE)
+    ids = np.zeros(MAX_ACTIVE, np.int64)  # faces already taken (a face is listed in several cells)
+    nf_seen = 0
+    m = 0
+    for k in range(normals.shape[0]):
+        if m < MAX_ACTIVE and plane_distance(normals, offsets, k, a0, a1, a2) <= touch:
+            nrm[m, :] = normals[k, :]
+            c[m] = offsets[k] + r
+            m += 1
+    if verts.shape[0]:
+        x0, x1 = cell_span(glo, ginv, gshape, 0, a0 - touch, a0 + touch)
+        y0, y1 = cell_span(glo, ginv, gshape, 1, a1 - touch, a1 + touch)
+        z0, z1 = cell_span(glo, ginv, gshape, 2, a2 - touch, a2 + touch) if dim == 3 else (0, 0)
+        for x in range(x0, x1 + 1):
+            for y in range(y0, y1 + 1):
+                for z in range(z0, z1 + 1):
+                    cc = (x * gshape[1] + y) * gshape[2] + z
+                    for s in range(gstart[cc], gstart[cc + 1]):
+                        f = gitems[s]
+                        seen = False
+                        for k in range(nf_seen):
+                            if ids[k] == f:
+                                seen = True
+                        if not seen and m < MAX_ACTIVE and face_distance(verts, f, a0, a1, a2) <= touch:
+                            ids[nf_seen] = f
+                            nf_seen += 1
+                            n0, n1, n2, off = contact_normal(verts, f, a0, a1, a2, a0, a1, a2)
+                            nrm[m, 0] = n0
+                            nrm[m, 1] = n1
+                            if dim == 3:
+                                nrm[m, 2] = n2
+                            c[m] = off + r
+                            m += 1
+    if m < 2:
+        return False
+    return respond(nrm, c, m, pos, vel, i, cr, TOL_REL * r)
 
 
 @by_size
@@ -186,9 +272,12 @@ def outside_mask(pos, radius, normals, offsets):
     return out
 
 
-def _plane_arrays(planes):
-    """(normals, offsets) as C-contiguous float64 from a Planes or a (normals, offsets) pair."""
-    if hasattr(planes, "normals"):
+def _plane_arrays(planes, dim=None):
+    """(normals, offsets) as C-contiguous float64 from a Planes or a (normals, offsets) pair
+    (None: no planes, the walls are faces only)."""
+    if planes is None:
+        normals, offsets = np.zeros((0, dim)), np.zeros(0)
+    elif hasattr(planes, "normals"):
         normals, offsets = planes.normals, planes.offsets
     else:
         normals, offsets = planes
@@ -204,13 +293,24 @@ def _inout(name, a, shape):
     return a
 
 
+def face_arrays(faces, dim, radius):
+    """Kernel arguments (verts, glo, ginv, gshape, gstart, gitems) for ``faces`` (a
+    :class:`sphcore.faces.Faces` or None), the grid's cells 4 radii wide (m)."""
+    if faces is None or faces.count == 0:
+        return empty_grid(dim)
+    grid = build_grid(faces.verts, 4.0 * float(radius))
+    return (np.ascontiguousarray(faces.verts, dtype=np.float64),) + grid.arrays()
+
+
 def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflections=1000,
-                      velocity_at_contact=True, guarded_flags=None, reflection_counts=None):
+                      velocity_at_contact=True, guarded_flags=None, reflection_counts=None,
+                      faces=None):
     """Python entry to :func:`reflect`: checks and converts arguments, returns the guard count.
 
     pos (m) and vel (m/s), (n, dim) writeable C-contiguous float64, are changed in place.
     pos0 (m) and acc (m/s^2, None for zero) are converted as needed; radius is a scalar
-    or (n,) (m); planes a :class:`sphcore.geometry.Planes` or ``(normals, offsets)``.
+    or (n,) (m); planes a :class:`sphcore.geometry.Planes` or ``(normals, offsets)``;
+    faces a :class:`sphcore.faces.Faces` (finite walls) or None.
     guarded_flags ((n,) int8) and reflection_counts ((n,) int32), when given, receive the
     per-particle guard flags and reflection counts.
     """
@@ -222,7 +322,7 @@ def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflectio
     if pos0.shape != (n, dim) or acc.shape != (n, dim):
         raise ValueError(f"pos0 and acc must have shape {(n, dim)}")
     radius = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, np.float64), (n,)))
-    normals, offsets = _plane_arrays(planes)
+    normals, offsets = _plane_arrays(planes, dim)
     if normals.shape[1:] != (dim,) or offsets.shape != (normals.shape[0],):
         raise ValueError(f"planes must have normals (k, {dim}) and offsets (k,)")
     if not 0.0 <= cr <= 1.0:
@@ -235,7 +335,8 @@ def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflectio
         raise ValueError(f"guarded_flags must be int8 of shape {(n,)}")
     if reflection_counts.dtype != np.int32 or reflection_counts.shape != (n,):
         raise ValueError(f"reflection_counts must be int32 of shape {(n,)}")
-    return int(reflect(pos0, pos, vel, acc, radius, normals, offsets, float(cr),
+    fa = face_arrays(faces, dim, radius.max() if n else 1.0)
+    return int(reflect(pos0, pos, vel, acc, radius, normals, offsets, *fa, float(cr),
                        int(max_reflections), bool(velocity_at_contact), guarded_flags,
                        reflection_counts))
 

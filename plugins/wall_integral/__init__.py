@@ -57,6 +57,10 @@ class WallIntegralPlugin:
             raise CaseError(file, "plugins.use", "wall_integral completes SPH sums; physics.sph is false")
         if case.planes.count == 0:
             raise CaseError(file, "plugins.use", "wall_integral needs wall planes ([domain] min/max or planes)")
+        faces = getattr(case, "faces", None)
+        if faces is not None and faces.count:
+            raise CaseError(file, "domain.walls", f"wall_integral completes the kernel at wall planes only; the "
+                            f"case has {faces.count} finite wall faces, which it would leave without pressure")
         self.normals = np.ascontiguousarray(case.planes.normals, dtype=np.float64)
         self.offsets = np.ascontiguousarray(case.planes.offsets, dtype=np.float64)
 
