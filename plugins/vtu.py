@@ -4,6 +4,9 @@ Layout below ``ctx.output_dir``::
 
     <name>.pvd              the collection: every frame with its simulated time (s)
     vtu/<name>_000000.vtu   one unstructured grid of vertex cells per frame
+    <name>_walls.vtu        the finite walls ([[domain.walls]]): line cells (2D) or
+                            triangles (3D), cell data "normal" (into the fluid); only
+                            when the case has such walls
 
 Each frame holds the particles sorted by id (the core reorders them by cell), so point i
 is the same particle in every frame. 2D runs are padded to 3D points (z = 0) and 3-vector
@@ -79,6 +82,17 @@ def frame_mesh(state) -> meshio.Mesh:
     return meshio.Mesh(points, cells, point_data=point_data)
 
 
+def walls_mesh(faces) -> meshio.Mesh:
+    """Wall faces as a meshio Mesh (points padded to 3D), cell data "normal" (3 components)."""
+    nf, dim = faces.count, faces.dim
+    pts = np.zeros((nf * dim, 3))
+    pts[:, :dim] = faces.verts.reshape(-1, dim)
+    normals = np.zeros((nf, 3))
+    normals[:, :dim] = faces.normals()
+    cells = np.arange(nf * dim).reshape(nf, dim)
+    return meshio.Mesh(pts, [("line" if dim == 2 else "triangle", cells)], cell_data={"normal": [normals]})
+
+
 def pvd_text(frames: list[tuple[float, str]]) -> str:
     """A ParaView collection listing ``(time in s, path relative to the pvd)`` frames."""
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
@@ -131,6 +145,11 @@ class VtuWriter(ScheduledWriter):
             path.parent.mkdir(exist_ok=True)
         except OSError as err:
             raise OutputError(f"{path.parent}: cannot create directory: {err.strerror or err}") from err
+        walls = getattr(ctx.case, "faces", None)
+        if walls is not None and walls.count and not (out / f"{name}_walls.vtu").exists():
+            wmesh = walls_mesh(walls)
+            replace_atomically(out / f"{name}_walls.vtu",
+                               lambda tmp: meshio.write(tmp, wmesh, file_format="vtu", binary=True))
         mesh = frame_mesh(ctx.state)
         # binary: base64 of the raw float64 bytes, so the file holds exact values
         replace_atomically(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu", binary=True))

@@ -133,7 +133,8 @@ def _options(only=None) -> int:
     from .options import Option
 
     tables = {("core", k): v for k, v in defaults.CORE.items()}
-    tables.update({("core", "blocks[]"): defaults.BLOCK, ("core", "domain.planes[]"): defaults.PLANE})
+    tables.update({("core", "blocks[]"): defaults.BLOCK, ("core", "domain.planes[]"): defaults.PLANE,
+                   ("core", "domain.walls[]"): defaults.WALL})
     for name, info in sorted(pluginhost.available().items()):
         if not info.error:
             tables.update({(name, t): schema for t, schema in (info.tables or {}).items()})

@@ -8,7 +8,9 @@
   (H = 0.6 m column);
 - Lobovsky et al. (2014) wall pressure at sensor 2 (15 mm above the floor), the 2.5 %,
   50 % and 97.5 % percentiles of p/(rho g H) over repeated runs against t/T, T = sqrt(H/g)
-  (H = 0.3 m).
+  (H = 0.3 m);
+- SPHERIC test 2 (Kleefsman et al. 2005): 3D dam break against a box, pressures P1-P4 on
+  the box (Pa) and water depths H1-H4 (m) against t (s).
 
 The pressure series are named (``SERIES``) so that a case can ask for one by name
 (``[[probes.pressure]] reference = "buchner_2002_P1"``).
@@ -51,6 +53,14 @@ def martin_moyce() -> np.ndarray:
 def martin_moyce_height() -> np.ndarray:
     """Rows (tau, H): tau = t sqrt(g/a), H = eta/(2a) at the back wall (n^2 = 2 column)."""
     return _columns("martin_moyce_1952_n2-2_height.csv", "tau", "H")
+
+
+@lru_cache(maxsize=None)
+def kleefsman() -> dict:
+    """SPHERIC test 2 columns: {"t": s, "P1".."P4": Pa (gauge), "H1".."H4": m}."""
+    cols = ("t", "P1", "P2", "P3", "P4", "H1", "H2", "H3", "H4")
+    a = _columns("spheric_test2_kleefsman_2005.csv", *cols)
+    return {c: np.ascontiguousarray(a[:, k]) for k, c in enumerate(cols)}
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,125 @@
+"""SPHERIC test 2 (Kleefsman et al. 2005): compare a run's probes with the experiment.
+
+    python postprocessing/spheric_test2.py RUN_DIR [--span T0 T1]
+
+Reads ``RUN_DIR/probes.csv`` (the ``probes`` plugin of ``cases/dam_break_obstacle_3d``)
+and the experiment shipped with sphcore (``reference.kleefsman()``). Prints, over the span
+the run covers (or ``--span``):
+
+- water depth H1-H4: RMS of (run - experiment) in m, the experiment interpolated at the
+  run's sample times;
+- pressure P1-P4: first-impact time, the first time p exceeds 2 kPa (about 18 % of P1's
+  peak; the same threshold for run and experiment), and the peak over the first impact
+  (from that time to 0.2 s after it) in Pa, with the run's relative error.
+
+Writes ``spheric_test2_depths.png`` and ``spheric_test2_pressures.png`` beside the run.
+A missing directory or file: one line on stderr, exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+IMPACT_PA = 2000.0  # first-impact threshold (Pa)
+WINDOW_S = 0.2  # the first impact's peak is searched this long after its arrival (s)
+
+
+def read_probes(path: Path) -> dict:
+    """Columns of probes.csv by probe name ("time", "H1", "P1", ...; units stripped)."""
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    out = {}
+    for k, name in enumerate(header):
+        out["time" if name == "time_s" else name.rsplit("_", 1)[0]] = data[:, k]
+    return out
+
+
+def arrival(t, p, threshold=IMPACT_PA):
+    """First time p > threshold (s), nan if never."""
+    above = np.nonzero(p > threshold)[0]
+    return float(t[above[0]]) if above.size else float("nan")
+
+
+def first_peak(t, p, t_arrival):
+    """Peak of p (Pa) within WINDOW_S after the first impact."""
+    if not np.isfinite(t_arrival):
+        return float("nan")
+    w = (t >= t_arrival) & (t <= t_arrival + WINDOW_S)
+    return float(p[w].max())
+
+
+def compare(run: dict, exp: dict, span) -> dict:
+    t = run["time"]
+    t0, t1 = span if span else (0.0, float(t[-1]))
+    out = {"span_s": [t0, t1]}
+    sel = (t >= t0) & (t <= t1)
+    for h in ("H1", "H2", "H3", "H4"):
+        if h in run:
+            ref = np.interp(t[sel], exp["t"], exp[h])
+            out[f"{h}_rms_m"] = float(np.sqrt(np.mean((run[h][sel] - ref) ** 2)))
+    for p in ("P1", "P2", "P3", "P4"):
+        if p in run:
+            ta_run, ta_exp = arrival(t, run[p]), arrival(exp["t"], exp[p])
+            pk_run, pk_exp = first_peak(t, run[p], ta_run), first_peak(exp["t"], exp[p], ta_exp)
+            out[p] = {"arrival_s": ta_run, "arrival_exp_s": ta_exp, "arrival_error_s": ta_run - ta_exp,
+                      "peak_Pa": pk_run, "peak_exp_Pa": pk_exp, "peak_error": pk_run / pk_exp - 1.0}
+    return out
+
+
+def plot(run: dict, exp: dict, out_dir: Path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t1 = float(run["time"][-1])
+    for group, unit, fname in (("H", "m", "depths"), ("P", "Pa", "pressures")):
+        fig, axes = plt.subplots(4, 1, figsize=(8, 10), sharex=True)
+        for k, ax in enumerate(axes):
+            name = f"{group}{k + 1}"
+            keep = exp["t"] <= max(t1, 1.0)
+            ax.plot(exp["t"][keep], exp[name][keep], color="0.5", lw=0.8, label="Kleefsman et al. 2005")
+            if name in run:
+                ax.plot(run["time"], run[name], color="C0", lw=1.0, label="sphcore")
+            ax.set_ylabel(f"{name} ({unit})")
+            ax.legend(loc="upper right", fontsize=8)
+        axes[-1].set_xlabel("t (s)")
+        fig.tight_layout()
+        fig.savefig(out_dir / f"spheric_test2_{fname}.png", dpi=120)
+        plt.close(fig)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("run_dir", type=Path)
+    ap.add_argument("--span", type=float, nargs=2, metavar=("T0", "T1"), help="time span for the depth RMS (s)")
+    args = ap.parse_args(argv)
+    path = args.run_dir / "probes.csv"
+    if not path.is_file():
+        print(f"spheric_test2: {path}: no such file (run cases/dam_break_obstacle_3d first)", file=sys.stderr)
+        return 2
+    from sphcore_plugins.gauges.reference import kleefsman
+
+    run, exp = read_probes(path), kleefsman()
+    res = compare(run, exp, args.span)
+    t0, t1 = res["span_s"]
+    print(f"SPHERIC test 2, {args.run_dir}: t in [{t0:.3g}, {t1:.3g}] s")
+    for h in ("H1", "H2", "H3", "H4"):
+        if f"{h}_rms_m" in res:
+            print(f"  {h}: depth RMS error {res[f'{h}_rms_m']:.4f} m")
+    for p in ("P1", "P2", "P3", "P4"):
+        if p in res:
+            r = res[p]
+            print(f"  {p}: first impact (p > {IMPACT_PA:.0f} Pa) at {r['arrival_s']:.4f} s (experiment "
+                  f"{r['arrival_exp_s']:.4f} s, error {r['arrival_error_s']:+.4f} s); peak {r['peak_Pa']:.0f} Pa "
+                  f"(experiment {r['peak_exp_Pa']:.0f} Pa, {100 * r['peak_error']:+.0f} %)")
+    plot(run, exp, args.run_dir)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

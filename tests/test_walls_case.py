@@ -1,0 +1,174 @@
+"""Finite walls from case.toml (``[[domain.walls]]``): clear errors for bad input, blocks
+clipped by the walls, a tank given by a mesh alone, walls in the VTU output, and runs in
+which no particle ever enters a wall: a water column falling onto a box obstacle in 2D
+and 3D, and water at rest in a tank with a step stays at rest."""
+
+from __future__ import annotations
+
+import json
+
+import meshio
+import numpy as np
+import pytest
+
+from sphcore import cli, runner
+from sphcore.errors import CaseError
+from sphcore.faces import box
+from sphcore.simulation import Simulation
+from sphcore.testing import write_case
+
+BASE = """
+[case]
+dim = {dim}
+
+[domain]
+{domain}
+
+{walls}
+
+[[blocks]]
+min = {bmin}
+max = {bmax}
+
+[particles]
+dx = {dx}
+
+[time]
+t_end = {t_end}
+
+[plugins]
+use = {plugins}
+"""
+
+
+def case_text(walls, dim=2, domain="min = [0.0, 0.0]\nmax = [1.0, 1.0]", bmin=None, bmax=None, dx=0.02,
+              t_end=0.002, plugins='["reflective"]'):
+    bmin = bmin or [0.0] * dim
+    bmax = bmax or [0.4] * dim
+    return BASE.format(dim=dim, domain=domain, walls=walls, bmin=bmin, bmax=bmax, dx=dx, t_end=t_end,
+                       plugins=plugins)
+
+
+def load(tmp_path, text):
+    return runner.load(write_case(tmp_path / "c", text))
+
+
+@pytest.mark.parametrize("walls, key, words", [
+    ('[[domain.walls]]\nshape = "sphere"', "domain.walls[0].shape", "one of"),
+    ('[[domain.walls]]\nmin = [0.5, 0.5]\nmax = [0.6, 0.6]', "domain.walls[0].shape", "required"),
+    ('[[domain.walls]]\nshape = "box"\nmin = [0.5, 0.5]', "domain.walls[0].max", "required"),
+    ('[[domain.walls]]\nshape = "box"\nmin = [0.5, 0.5]\nmax = [0.4, 0.6]', "domain.walls[0].max", "above min"),
+    ('[[domain.walls]]\nshape = "box"\nmin = [0.5, 0.5]\nmax = [0.6, 0.6]\npoints = [[0, 0]]',
+     "domain.walls[0].points", "not used"),
+    ('[[domain.walls]]\nshape = "polygon"\npoints = [[0.5, 0.5], [0.6, 0.5]]', "domain.walls[0].points",
+     "at least 3"),
+    ('[[domain.walls]]\nshape = "polygon"\npoints = [[0.5, 0.5], [0.7, 0.7], [0.7, 0.5], [0.5, 0.7]]',
+     "domain.walls[0].points", "cross"),
+    ('[[domain.walls]]\nshape = "polyline"\npoints = [[0.5, 0.5], [0.7, 0.7]]\nfluid = "inside"',
+     "domain.walls[0].fluid", "both sides"),
+    ('[[domain.walls]]\nshape = "mesh"\nfile = "nowhere.stl"', "domain.walls[0].file", "nowhere.stl"),
+    ('[[domain.walls]]\nshape = "box"\nmin = [0.5, 0.5]\nmax = [0.6, 0.6]\ncolour = "red"',
+     "domain.walls[0].colour", ""),
+])
+def test_bad_walls_name_the_key(tmp_path, walls, key, words):
+    with pytest.raises(CaseError) as err:
+        load(tmp_path, case_text(walls))
+    assert err.value.key == key and words in err.value.expected and err.value.file.endswith("case.toml")
+
+
+def test_bad_wall_exits_2_and_writes_nothing(tmp_path, capsys):
+    d = write_case(tmp_path / "c", case_text('[[domain.walls]]\nshape = "polygon"\npoints = [[0.5, 0.5]]'))
+    before = sorted(p.name for p in d.iterdir())
+    assert cli.main(["run", str(d)]) == 2
+    assert "domain.walls[0].points" in capsys.readouterr().err
+    assert sorted(p.name for p in d.iterdir()) == before
+
+
+def test_a_mesh_that_is_not_closed_is_refused(tmp_path):
+    d = tmp_path / "c"
+    d.mkdir()
+    tris = box([0.4, 0.4, 0.4], [0.6, 0.6, 0.6])[:-1]  # one triangle missing
+    pts = tris.reshape(-1, 3)
+    meshio.write(d / "open.stl", meshio.Mesh(pts, [("triangle", np.arange(len(pts)).reshape(-1, 3))]))
+    text = case_text('[[domain.walls]]\nshape = "mesh"\nfile = "open.stl"', dim=3,
+                     domain="min = [0.0, 0.0, 0.0]\nmax = [1.0, 1.0, 1.0]", dx=0.05)
+    with pytest.raises(CaseError) as err:
+        runner.load(write_case(d, text))
+    assert "not closed" in err.value.expected and "open.stl" in err.value.expected
+
+
+def test_blocks_are_clipped_by_walls_and_check_counts_them(tmp_path, capsys):
+    # a box obstacle inside the block: particles in it or within a radius of it are not made
+    text = case_text('[[domain.walls]]\nshape = "box"\nmin = [0.1, 0.0]\nmax = [0.2, 0.1]')
+    case, pm = load(tmp_path, text)
+    sim = Simulation(case, pm, None)
+    st = sim.state
+    assert st.n + st.removed_by_walls == 400
+    # lattice centres 0.01, 0.03, ...; removed: closer than r = 0.01 to the box [0.1, 0.2] x
+    # [0, 0.1], i.e. x in (0.09, 0.21), y < 0.11: 5 x 5 (those at exactly r are kept)
+    assert st.removed_by_walls == 25
+    assert np.all(case.faces.distances(st.pos) >= 0.01 * (1 - 1e-9)) and case.faces.in_fluid(st.pos).all()
+    assert cli.main(["check", str(tmp_path / "c")]) == 0
+    assert "4 wall faces (25 particles of the blocks not created" in capsys.readouterr().out
+
+
+def test_a_tank_given_by_a_mesh_alone(tmp_path):
+    # no planes: an L-shaped 2D tank from a polygon with fluid inside
+    walls = ('[[domain.walls]]\nshape = "polygon"\nfluid = "inside"\n'
+             'points = [[0, 0], [1, 0], [1, 0.3], [0.4, 0.3], [0.4, 1], [0, 1]]')
+    text = case_text(walls, domain="", bmin=[0.0, 0.0], bmax=[0.4, 0.6], t_end=0.3,
+                     plugins='["reflective"]')
+    case, pm = load(tmp_path, text)
+    assert case.planes.count == 0 and case.faces.count == 6
+    sim = Simulation(case, pm, None)
+    n0 = sim.state.n
+    while not sim.done():
+        sim.advance()
+        st = sim.state
+        assert np.all(case.faces.distances(st.pos) >= st.radius * (1 - 1e-9))
+        assert case.faces.in_fluid(st.pos).all()
+    assert sim.state.n == n0 and np.isfinite(sim.state.vel).all()
+    # the column collapsed into the foot of the L
+    assert sim.state.pos[:, 0].max() > 0.5
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_water_falls_onto_a_box_obstacle_and_stays_out_of_it(tmp_path, dim):
+    lo, hi = [0.3] + [0.0] * (dim - 1), [0.5] + [0.15] * (dim - 1)
+    if dim == 3:
+        lo[1], hi[1] = 0.05, 0.25
+    walls = f'[[domain.walls]]\nshape = "box"\nmin = {lo}\nmax = {hi}'
+    domain = "min = [0.0, 0.0]\nmax = [1.0, 1.0]" if dim == 2 else "min = [0.0, 0.0, 0.0]\nmax = [1.0, 0.3, 1.0]"
+    bmin = [0.25, 0.3] if dim == 2 else [0.25, 0.0, 0.3]
+    bmax = [0.55, 0.6] if dim == 2 else [0.55, 0.3, 0.6]
+    text = case_text(walls, dim=dim, domain=domain, bmin=bmin, bmax=bmax, dx=0.02 if dim == 2 else 0.03,
+                     t_end=0.35 if dim == 2 else 0.25)
+    case, pm = load(tmp_path, text)
+    sim = Simulation(case, pm, None)
+    n0 = sim.state.n
+    e = "z" if dim == 3 else "y"
+    while not sim.done():
+        sim.advance()
+        st = sim.state
+        assert np.all(case.faces.distances(st.pos) >= st.radius * (1 - 1e-9)), e
+        assert case.faces.in_fluid(st.pos).all()
+    st = sim.state
+    assert st.n == n0 and np.isfinite(st.vel).all() and np.isfinite(st.rho).all()
+    # the water hit the top of the box and flowed off both sides
+    assert st.pos[:, 0].min() < 0.3 and st.pos[:, 0].max() > 0.5
+
+
+def test_walls_are_written_for_paraview(tmp_path):
+    text = case_text('[[domain.walls]]\nshape = "polygon"\npoints = [[0.6, 0.0], [0.8, 0.0], [0.7, 0.2]]',
+                     plugins='["reflective", "vtu"]')
+    d = write_case(tmp_path / "c", text)
+    assert cli.main(["run", str(d), "--progress", "off"]) == 0
+    mesh = meshio.read(d / "output" / "c_walls.vtu")
+    assert mesh.cells[0].type == "line" and len(mesh.cells[0].data) == 3
+    normals = mesh.cell_data["normal"][0]
+    # an obstacle: normals point out of the triangle, into the fluid
+    centre = np.array([0.7, 0.2 / 3, 0.0])
+    mids = mesh.points[mesh.cells[0].data].mean(axis=1)
+    assert np.all(np.einsum("ij,ij->i", mids - centre, normals) > 0)
+    summary = json.loads((d / "output" / "summary.json").read_text())
+    assert summary["reflective"]["guard_returns"] == 0
