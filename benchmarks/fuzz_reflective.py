@@ -19,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore_plugins.reflective.collision import outside_mask, reflect
+from sphcore_plugins.reflective.collision import face_arrays, outside_mask, reflect
+from sphcore_plugins.reflective.corner import scratch
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the test domains
 from domains import (box, random_directions, random_polytope,  # noqa: E402
                      random_rotation, sample_inside, wedge)
@@ -58,8 +59,9 @@ def batch(rng, kind, n, cr, contact, max_reflections):
     normals = np.ascontiguousarray(dom.planes.normals)
     offsets = np.ascontiguousarray(dom.planes.offsets)
     flags, counts = np.empty(n, np.int8), np.empty(n, np.int32)
+    no_faces, work = face_arrays(None, dim, 1.0), scratch()
     t0 = time.perf_counter()
-    guarded = reflect(pos0, pos, vel, acc, radius, normals, offsets, float(cr),
+    guarded = reflect(pos0, pos, vel, acc, radius, normals, offsets, *no_faces, *work, float(cr),
                       int(max_reflections), bool(contact), flags, counts)
     seconds = time.perf_counter() - t0
     bad = ~(np.isfinite(pos).all(axis=1) & np.isfinite(vel).all(axis=1))

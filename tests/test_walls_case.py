@@ -1,7 +1,7 @@
 """Finite walls from case.toml (``[[domain.walls]]``): clear errors for bad input, blocks
-clipped by the walls, a tank given by a mesh alone, walls in the VTU output, and runs in
-which no particle ever enters a wall: a water column falling onto a box obstacle in 2D
-and 3D, and water at rest in a tank with a step stays at rest."""
+clipped by the walls, a tank given by a polygon alone, walls in the VTU output, and runs
+in which no particle ever enters a wall: a water column falling onto a box obstacle in 2D
+and 3D, and one collapsing into the foot of an L-shaped tank."""
 
 from __future__ import annotations
 
@@ -172,3 +172,17 @@ def test_walls_are_written_for_paraview(tmp_path):
     assert np.all(np.einsum("ij,ij->i", mids - centre, normals) > 0)
     summary = json.loads((d / "output" / "summary.json").read_text())
     assert summary["reflective"]["guard_returns"] == 0
+
+
+def test_a_probe_inside_an_obstacle_is_refused_one_on_its_face_is_not(tmp_path):
+    walls = '[[domain.walls]]\nshape = "box"\nmin = [0.6, 0.0]\nmax = [0.8, 0.2]'
+    for point, ok in (([0.7, 0.1], False), ([0.6, 0.1], True), ([0.5, 0.1], True)):
+        text = case_text(walls, plugins='["reflective", "probes"]') + (
+            f'\n[[probes.pressure]]\nname = "P"\npoint = {point}\n')
+        d = write_case(tmp_path / f"c{point[0]}", text)
+        if ok:
+            runner.load(d)
+        else:
+            with pytest.raises(CaseError) as err:
+                runner.load(d)
+            assert err.value.key == "probes.pressure[0].point" and "inside a solid wall" in err.value.expected

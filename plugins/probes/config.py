@@ -87,11 +87,20 @@ def _vec(file, key, value, dim):
 
 
 def _inside(case, file, key, pts):
-    d = case.planes.distances(np.atleast_2d(pts))
+    pts = np.atleast_2d(pts)
+    d = case.planes.distances(pts)
     if (d < -ON_WALL_TOL).any():
         i, q = np.argwhere(d < -ON_WALL_TOL)[0]
-        raise CaseError(file, key, f"point {np.atleast_2d(pts)[i].round(9).tolist()} lies outside the domain "
+        raise CaseError(file, key, f"point {pts[i].round(9).tolist()} lies outside the domain "
                         f"(wall plane {q}, {-d[i, q]:.6g} m beyond it)")
+    faces = getattr(case, "faces", None)
+    if faces is not None and faces.count:
+        # a sensor on a wall face is fine; one inside a solid wall is not
+        solid = ~faces.in_fluid(pts) & (faces.distances(pts) > ON_WALL_TOL)
+        if solid.any():
+            i = int(np.argmax(solid))
+            raise CaseError(file, key, f"point {pts[i].round(9).tolist()} lies inside a solid wall "
+                            "([[domain.walls]]); a sensor goes on its face or in the fluid")
 
 
 def _name(file, key, e, seen):

@@ -23,6 +23,7 @@ from sphcore.api import CaseError, Option, hookimpl
 
 from .collision import (TOL_REL, clearance, face_arrays, min_clearance, outside, outside_mask,
                         reflect, reflect_particles)
+from .corner import scratch
 
 __all__ = ["ReflectivePlugin", "reflect", "reflect_particles", "clearance", "min_clearance",
            "outside", "outside_mask", "TOL_REL"]
@@ -41,6 +42,7 @@ class ReflectivePlugin:
         self.offsets = np.zeros(0)
         self.walls = None  # finite faces (sphcore.faces.Faces) or None
         self.faces = ()  # their kernel arrays, built at setup (the grid needs the radius)
+        self.scratch = scratch()  # per-thread work arrays of corner contacts
         # per-particle kernel outputs, resized when the particle count changes
         self._guarded = np.zeros(0, np.int8)
         self._counts = np.zeros(0, np.int32)
@@ -116,7 +118,7 @@ class ReflectivePlugin:
             self._guarded = np.zeros(n, np.int8)
             self._counts = np.zeros(n, np.int32)
         guarded = reflect(pos0, pos, vel, acc, ctx.state.radius, self.normals, self.offsets,
-                          *self.faces, self.cr, self.max_reflections, self.velocity_at_contact,
+                          *self.faces, *self.scratch, self.cr, self.max_reflections, self.velocity_at_contact,
                           self._guarded, self._counts)
         hit = int(np.count_nonzero(self._counts))
         # ctx.stats: in summary.json under "reflective" and in every checkpoint, so the

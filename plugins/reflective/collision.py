@@ -54,7 +54,7 @@ import numpy as np
 from sphcore.api import (build_grid, by_size, cell_span, face_distance, particle_distance,
                          plane_distance)
 
-from .corner import MAX_ACTIVE, respond
+from .corner import MAX_ACTIVE, respond, scratch
 from .facecontact import contact_normal, earliest_face, empty_grid, near_any_face
 
 #: relative contact allowance: a plane collides only when d < r - TOL_REL * r
@@ -69,7 +69,7 @@ def _limit(r):
 
 @by_size
 def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
-            gitems, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
+            gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
     """Reflect every particle that left the domain during a step; return the guard count.
 
     pos0, pos, vel, acc: (n, dim) C-contiguous float64: start and end positions (m),
@@ -77,6 +77,7 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gsh
     normals (k, dim) unit vectors into the domain, offsets (k,) = n . X0 (m).
     verts (nf, dim, dim): finite faces (:mod:`sphcore.faces`), with their grid
     (glo, ginv, gshape, gstart, gitems: :meth:`sphcore.facegrid.FaceGrid.arrays`).
+    ws, wi: scratch rows for corner contacts, one per block of particles (:func:`.corner.scratch`).
     cr: restitution coefficient (Eq. 2), 0 <= cr <= 1. max_reflections: int >= 0.
     velocity_at_contact: bool, Eq. 2 at the contact point (True) or at the end point.
     guarded_flags (n,) int8 out: 1 where the guard put the particle back at pos0.
@@ -85,32 +86,37 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gsh
     """
     n = pos.shape[0]
     three = pos.shape[1] == 3
+    rows = ws.shape[0]
     guarded = 0
-    for i in numba.prange(n):
-        guarded_flags[i] = 0
-        reflection_counts[i] = 0
-        # most particles touch no wall: one cheap pass over the planes (and the faces
-        # listed near the step) decides; the full loop costs ten times more per particle
-        lim = _limit(radius[i])
-        hit = False
-        for k in range(normals.shape[0]):
-            if particle_distance(normals, offsets, k, pos, i) < lim:
-                hit = True
-                break
-        if not hit and verts.shape[0]:
-            hit = near_any_face(verts, glo, ginv, gshape, gstart, gitems, pos0[i, 0], pos0[i, 1],
-                                pos0[i, 2] if three else 0.0, pos[i, 0], pos[i, 1],
-                                pos[i, 2] if three else 0.0, lim)
-        if hit:
-            guarded += _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv,
-                                    gshape, gstart, gitems, cr, max_reflections, velocity_at_contact,
-                                    guarded_flags, reflection_counts)
+    # blocks of particles, each with its own scratch row for corner contacts
+    for b in numba.prange(rows):
+        g = 0
+        for i in range(b * n // rows, (b + 1) * n // rows):
+            guarded_flags[i] = 0
+            reflection_counts[i] = 0
+            # most particles touch no wall: one cheap pass over the planes (and the faces
+            # listed near the step) decides; the full loop costs ten times more per particle
+            lim = _limit(radius[i])
+            hit = False
+            for k in range(normals.shape[0]):
+                if particle_distance(normals, offsets, k, pos, i) < lim:
+                    hit = True
+                    break
+            if not hit and verts.shape[0]:
+                hit = near_any_face(verts, glo, ginv, gshape, gstart, gitems, pos0[i, 0], pos0[i, 1],
+                                    pos0[i, 2] if three else 0.0, pos[i, 0], pos[i, 1],
+                                    pos[i, 2] if three else 0.0, lim)
+            if hit:
+                g += _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv,
+                                  gshape, gstart, gitems, ws[b], wi[b], cr, max_reflections,
+                                  velocity_at_contact, guarded_flags, reflection_counts)
+        guarded += g
     return guarded
 
 
 @numba.njit(cache=True)
 def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
-                 gitems, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
+                 gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
     """The paper's loop for particle i (earliest contact first, until inside or the guard);
     returns 1 if the guard put it back at pos0, else 0. Planes and faces compete for the
     earliest contact; from the third reflection of a step, a contact that touches two or
@@ -167,7 +173,7 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
             n2 = normals[best, 2] if dim == 3 else 0.0
         count += 1
         if count >= 3 and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart,
-                                  gitems, a0, a1, a2, r, cr):
+                                  gitems, a0, a1, a2, r, cr, ws, wi):
             continue
         depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
         u = vel[i, 0] * n0 + vel[i, 1] * n1
@@ -202,14 +208,14 @@ def plane_distance_n(n0, n1, n2, off, x0, x1, x2):
 
 @numba.njit(cache=True)
 def _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart, gitems, a0, a1, a2,
-            r, cr):
+            r, cr, ws, wi):
     """Resolve the contact at A as one with every wall touching there (:mod:`.corner`) when
-    two or more do; False (nothing changed) otherwise."""
+    two or more do; False (nothing changed) otherwise. ws, wi: this thread's scratch."""
     dim = pos.shape[1]
     touch = r * (1.0 + 1e-6)
-    nrm = np.zeros((MAX_ACTIVE, dim))
-    c = np.zeros(MAX_ACTIVE)
-    ids = np.zeros(MAX_ACTIVE, np.int64)  # faces already taken (a face is listed in several cells)
+    nrm = ws[0:MAX_ACTIVE * dim].reshape((MAX_ACTIVE, dim))
+    c = ws[24:24 + MAX_ACTIVE]
+    ids = wi[3:3 + MAX_ACTIVE]  # faces already taken (a face is listed in several cells)
     nf_seen = 0
     m = 0
     for k in range(normals.shape[0]):
@@ -243,7 +249,7 @@ def _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart, git
                             m += 1
     if m < 2:
         return False
-    return respond(nrm, c, m, pos, vel, i, cr, TOL_REL * r)
+    return respond(nrm, c, m, pos, vel, i, cr, TOL_REL * r, ws, wi)
 
 
 @by_size
@@ -336,7 +342,7 @@ def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflectio
     if reflection_counts.dtype != np.int32 or reflection_counts.shape != (n,):
         raise ValueError(f"reflection_counts must be int32 of shape {(n,)}")
     fa = face_arrays(faces, dim, radius.max() if n else 1.0)
-    return int(reflect(pos0, pos, vel, acc, radius, normals, offsets, *fa, float(cr),
+    return int(reflect(pos0, pos, vel, acc, radius, normals, offsets, *fa, *scratch(), float(cr),
                        int(max_reflections), bool(velocity_at_contact), guarded_flags,
                        reflection_counts))
 

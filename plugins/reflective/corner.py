@@ -36,10 +36,29 @@ def _dot(a, b):
     return s
 
 
+#: scratch sizes: float64 and int64 words one corner contact uses (:func:`scratch`)
+NFLOAT = 96
+NINT = 16
+
+
+#: rows of scratch: the kernel splits the particles into this many blocks, one row each
+#: (a block runs on one thread at a time; numba.get_thread_id() would be simpler but its
+#: compiled code does not survive numba's disk cache: a cached kernel crashed)
+ROWS = 64
+
+
+def scratch():
+    """(floats, ints) of shapes (ROWS, NFLOAT), (ROWS, NINT): the work arrays of corner
+    contacts, one row per block of particles, allocated once by the caller so that the
+    kernel allocates nothing."""
+    return np.zeros((ROWS, NFLOAT)), np.zeros((ROWS, NINT), np.int64)
+
+
 @njit(cache=True)
-def project(nrm, c, m, x, tol):
+def project(nrm, c, m, x, tol, ws, wi):
     """Nearest point to x (dim,) with nrm[k] . y >= c[k] for k < m (in place into x);
-    False when the constraints admit no such point (x is left unchanged)."""
+    False when the constraints admit no such point (x is left unchanged). ws, wi: scratch
+    (``ws[55:]``, ``wi[0:3]`` are used)."""
     dim = x.shape[0]
     ok = True
     for k in range(m):
@@ -48,11 +67,11 @@ def project(nrm, c, m, x, tol):
     if ok:
         return True
     best = np.inf
-    out = x.copy()
-    g = np.zeros((3, 3))
-    rhs = np.zeros(3)
-    idx = np.zeros(3, np.int64)
-    y = np.zeros(dim)
+    out = ws[55:55 + dim]
+    g = ws[58:67].reshape((3, 3))
+    rhs = ws[67:70]
+    y = ws[70:70 + dim]
+    idx = wi[0:3]
     for size in range(1, min(dim, m) + 1):
         # every subset of `size` constraints, in lexicographic order
         for j in range(size):
@@ -62,22 +81,27 @@ def project(nrm, c, m, x, tol):
                 rhs[a] = c[idx[a]] - _dot(nrm[idx[a]], x)
                 for b in range(size):
                     g[a, b] = _dot(nrm[idx[a]], nrm[idx[b]])
-            lam = _solve(g, rhs, size)
-            if lam.shape[0] == size and lam.min() >= -1e-12:
-                for j in range(dim):
-                    y[j] = x[j]
-                    for a in range(size):
-                        y[j] += lam[a] * nrm[idx[a], j]
-                feasible = True
-                for k in range(m):
-                    if _dot(nrm[k], y) < c[k] - tol:
-                        feasible = False
-                d = 0.0
-                for j in range(dim):
-                    d += (y[j] - x[j]) ** 2
-                if feasible and d < best:
-                    best = d
-                    out[:] = y
+            lam = ws[85:85 + size]
+            if _solve(g, rhs, size, ws[73:82].reshape((3, 3)), ws[82:85], lam):
+                nonneg = True
+                for a in range(size):
+                    if lam[a] < -1e-12:
+                        nonneg = False
+                if nonneg:
+                    for j in range(dim):
+                        y[j] = x[j]
+                        for a in range(size):
+                            y[j] += lam[a] * nrm[idx[a], j]
+                    feasible = True
+                    for k in range(m):
+                        if _dot(nrm[k], y) < c[k] - tol:
+                            feasible = False
+                    d = 0.0
+                    for j in range(dim):
+                        d += (y[j] - x[j]) ** 2
+                    if feasible and d < best:
+                        best = d
+                        out[:] = y
             # next subset
             j = size - 1
             while j >= 0 and idx[j] == m - size + j:
@@ -94,18 +118,20 @@ def project(nrm, c, m, x, tol):
 
 
 @njit(cache=True)
-def _solve(g, rhs, size):
-    """Solution of the size x size system g lam = rhs (Gaussian elimination with partial
-    pivoting); an empty array when it is singular (linearly dependent normals)."""
-    a = g[:size, :size].copy()
-    b = rhs[:size].copy()
+def _solve(g, rhs, size, a, b, lam):
+    """Solve the size x size system g lam = rhs into ``lam`` (Gaussian elimination with
+    partial pivoting; a, b scratch); False when it is singular (dependent normals)."""
+    for r_ in range(size):
+        b[r_] = rhs[r_]
+        for k in range(size):
+            a[r_, k] = g[r_, k]
     for col in range(size):
         p = col
         for rr in range(col + 1, size):
             if abs(a[rr, col]) > abs(a[p, col]):
                 p = rr
         if abs(a[p, col]) < 1e-10:
-            return np.zeros(0)
+            return False
         if p != col:
             for k in range(size):
                 a[col, k], a[p, k] = a[p, k], a[col, k]
@@ -115,39 +141,51 @@ def _solve(g, rhs, size):
             for k in range(col, size):
                 a[rr, k] -= f * a[col, k]
             b[rr] -= f * b[col]
-    lam = np.zeros(size)
     for rr in range(size - 1, -1, -1):
         s = b[rr]
         for k in range(rr + 1, size):
             s -= a[rr, k] * lam[k]
         lam[rr] = s / a[rr, rr]
-    return lam
+    return True
 
 
 @njit(cache=True)
-def respond(nrm, c, m, pos, vel, i, cr, tol):
+def respond(nrm, c, m, pos, vel, i, cr, tol, ws, wi):
     """The joint response for particle i (pos, vel in place) to the m walls nrm . X >= c;
-    False when the half-spaces have no common point (then nothing is changed)."""
+    False when the half-spaces have no common point (then nothing is changed).
+    ws, wi: scratch (``ws[32:]`` and ``wi[0:3]`` are used)."""
     dim = pos.shape[1]
-    b = pos[i, :dim].copy()
-    p = b.copy()
-    if not project(nrm, c, m, p, tol):
+    b = ws[32:32 + dim]
+    p = ws[35:35 + dim]
+    q = ws[38:38 + dim]
+    for j in range(dim):
+        b[j] = pos[i, j]
+        p[j] = pos[i, j]
+    if not project(nrm, c, m, p, tol, ws, wi):
         return False
-    q = p + cr * (p - b)
     ok = True
+    for j in range(dim):
+        q[j] = p[j] + cr * (p[j] - b[j])
     for k in range(m):
         if _dot(nrm[k], q) < c[k] - tol:
             ok = False
-    pos[i, :dim] = q if ok else p
-    v = vel[i, :dim].copy()
-    w = v.copy()
-    zero = np.zeros(m)
+    for j in range(dim):
+        pos[i, j] = q[j] if ok else p[j]
+    v = ws[41:41 + dim]
+    w = ws[44:44 + dim]
+    zero = ws[47:55]
+    for j in range(dim):
+        v[j] = vel[i, j]
+        w[j] = vel[i, j]
+    zero[:] = 0.0
     vtol = 1e-12 * np.sqrt(_dot(v, v))
-    if project(nrm, zero, m, w, vtol):
-        u = w + cr * (w - v)
+    if project(nrm, zero, m, w, vtol, ws, wi):
+        for j in range(dim):
+            q[j] = w[j] + cr * (w[j] - v[j])
         ok = True
         for k in range(m):
-            if _dot(nrm[k], u) < -vtol:
+            if _dot(nrm[k], q) < -vtol:
                 ok = False
-        vel[i, :dim] = u if ok else w
+        for j in range(dim):
+            vel[i, j] = q[j] if ok else w[j]
     return True

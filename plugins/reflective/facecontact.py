@@ -65,9 +65,12 @@ def earliest_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, 
                     f = items[s]
                     if f == best or face_distance(verts, f, b0, b1, b2) - ln >= lim:
                         continue
-                    if first_contact(verts, f, a0, a1, a2, b0, b1, b2, lim) > 1.0:
+                    tl = first_contact(verts, f, a0, a1, a2, b0, b1, b2, lim)
+                    if tl > 1.0:
                         continue  # never closer than lim: a graze within the tolerance
-                    t = first_contact(verts, f, a0, a1, a2, b0, b1, b2, r)
+                    # the contact at r comes no later than at lim; a start within an ulp of
+                    # r (a touching start, a corner's contact point) may round to "never"
+                    t = min(first_contact(verts, f, a0, a1, a2, b0, b1, b2, r), tl)
                     if t < fbest:
                         fbest = t
                         best = f
