@@ -54,7 +54,7 @@ use = ["reflective"]
 
 def sphere_mesh(path: Path, faces: int, centre=(0.25, 0.25, 0.2), radius=0.1) -> int:
     """A UV sphere of about ``faces`` triangles written to ``path`` (STL); its face count."""
-    m = max(int(round(np.sqrt(faces / 2.0))), 3)  # rings; 2 m (m - 1) triangles
+    m = max(int(round(0.5 + np.sqrt(0.25 + faces / 4.0))), 3)  # rings; 4 m (m - 1) triangles
     k = 2 * m
     th = np.linspace(0.0, np.pi, m + 1)[1:-1]
     ph = np.linspace(0.0, 2 * np.pi, k, endpoint=False)

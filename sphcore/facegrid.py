@@ -96,9 +96,13 @@ def _fill(verts, lo, cell, shape, cursor, items, write):
 @njit(cache=True, inline="always")
 def cell_span(lo, inv_cell, shape, c, xmin, xmax):
     """Cells (first, last) along axis c covering [xmin, xmax] (m); first > last if none."""
-    # clamp as floats first: a point far away (or NaN) must not overflow the int
-    a = min(max(math.floor((xmin - lo[c]) * inv_cell), 0.0), float(shape[c]))
-    b = min(max(math.floor((xmax - lo[c]) * inv_cell), -1.0), float(shape[c] - 1))
+    # clamp as floats before floor: a point far away (or inf) must not overflow the int
+    a = (xmin - lo[c]) * inv_cell
+    b = (xmax - lo[c]) * inv_cell
     if not (a <= b):  # NaN compares false: no cell
+        return 1, 0
+    a = math.floor(min(max(a, 0.0), float(shape[c])))
+    b = math.floor(min(max(b, -1.0), float(shape[c] - 1)))
+    if a > b:
         return 1, 0
     return int(a), int(b)

@@ -23,10 +23,6 @@ from numba import njit
 
 from .facegeom import face_distance
 
-#: cells of the face grid are capped: past this the cell side grows
-MAX_GRID_CELLS = 1 << 22
-
-
 @dataclass(frozen=True)
 class Faces:
     """Wall faces ``verts`` (nf, dim, dim) and the closed groups among them.

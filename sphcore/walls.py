@@ -87,8 +87,10 @@ def parse_walls(file, entries, dim, case_dir) -> Faces:
                 raise CaseError(file, f"{key}.fluid", "a polyline is open: the fluid is on both sides")
             p = _points(file, f"{key}.points", w["points"], 2, 2)
             seg = polyline(p)
-            if np.any(np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1) == 0.0):
-                raise CaseError(file, f"{key}.points", "expected no repeated consecutive point")
+            length = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1)
+            if np.any(length <= 1e-12 * max(np.ptp(p, axis=0).max(), 1e-300)):
+                raise CaseError(file, f"{key}.points", f"segment {int(np.argmin(length))} has zero length "
+                                "(repeated point)")
             part = Faces(seg)
         else:
             path = (case_dir / w["file"]) if case_dir is not None else w["file"]

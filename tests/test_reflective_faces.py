@@ -401,3 +401,43 @@ def test_sliding_into_a_concave_corner_with_cr_0():
     pos, vel, g, flags, counts = kernel([a], [b], [(b - a) / 1e-3], None, r, None, faces, 0.0)
     clearance = faces.distances(pos)[0] - r
     assert clearance >= -1e-9 * r, f"ends {-clearance} closer than r to the wall: {pos[0]}"
+
+
+# --------------------------------------------------------------------------------------
+# Found in review: an overlapping start leaving, a step to 1e18 m, a box corner under gravity
+# --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("cr", [0.0, 0.5, 1.0])
+def test_a_start_overlapping_a_face_and_leaving_it_is_left_alone(cr):
+    # A at 0.5 from a segment, r = 1 (an overlap left by an earlier bad state), moving
+    # away: the path never comes closer, so no contact (it used to be pinned by the guard)
+    faces = Faces(polyline([[-10.0, 0.0], [10.0, 0.0]]))
+    pos, vel, g, flags, counts = kernel([[0.0, 0.5]], [[0.0, 2.0]], [[0.0, 1.5]], None, 1.0, None, faces, cr)
+    assert g == 0 and counts[0] == 0
+    assert np.array_equal(pos, [[0.0, 2.0]]) and np.array_equal(vel, [[0.0, 1.5]])
+
+
+@pytest.mark.parametrize("length", [1e17, 1e18, 1e30])
+def test_a_step_of_any_length_stays_in_a_tank_of_faces(length):
+    # the grid's cell range must not overflow for a point far outside it (the int of a
+    # floor used to wrap and the query saw no cell). Steps whose squares overflow (1e300 m,
+    # inf) belong to a run already blown up: the core's checks stop it as unstable.
+    tank = closed_wall(box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]), True)
+    a = np.array([[0.5, 0.5, 0.5]])
+    b = np.array([[0.5 + length, 0.5, 0.5]])
+    pos, vel, g, flags, counts = kernel(a, b, [[1.0, 0.0, 0.0]], None, 0.01, None, tank, 1.0)
+    assert np.all(np.isfinite(pos))
+    assert tank.in_fluid(pos)[0] and tank.distances(pos)[0] >= 0.01 * (1 - 1e-9)
+
+
+@pytest.mark.parametrize("cr", [0.5, 1.0])
+def test_a_box_corner_under_gravity_keeps_the_contact_form_of_eq2(cr):
+    # three walls met once each: the paper's sequence (no joint contact), so Eq. 2 at the
+    # contact corrects each wall's normal velocity for gravity's work: the floor's
+    # normal velocity comes out below CR |u| (here 0 for the z wall), not -CR u
+    planes = Planes.box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])
+    pos, vel, g, flags, counts = kernel([[0.1, 0.1, 0.1]], [[0.05, 0.05, 0.05]], [[-1.0, -1.0, -1.0]],
+                                        np.array([[0.0, 0.0, -9.81]]), 0.1, planes, None, cr)
+    assert counts[0] == 3 and g == 0
+    assert np.allclose(vel[0, :2], cr) and 0.0 <= vel[0, 2] < cr

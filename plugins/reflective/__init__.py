@@ -89,7 +89,7 @@ class ReflectivePlugin:
     def sph_setup(self, ctx):
         # The guard relies on every start-of-step position being inside; check the first.
         st = ctx.state
-        if self.walls is not None:  # grid cells four radii wide
+        if self.walls is not None:  # the grid's cells are sized by the radius
             self.faces = face_arrays(self.walls, self.normals.shape[1], st.radius.max() if st.n else 1.0)
         if st.n == 0:
             return
@@ -100,6 +100,13 @@ class ReflectivePlugin:
             raise CaseError(getattr(ctx.case, "file", "case.toml"), "blocks",
                             f"particle id {int(st.id[worst])} at {st.pos[worst].tolist()} overlaps "
                             f"a wall by {-c[worst]:.3g} m (a centre needs distance >= radius)")
+        if self.walls is not None:
+            d = self.walls.distances(st.pos) - st.radius * (1.0 - TOL_REL)
+            if (d < 0).any() or not self.walls.in_fluid(st.pos).all():
+                worst = int(np.argmin(np.where(self.walls.in_fluid(st.pos), d, -np.inf)))
+                raise CaseError(getattr(ctx.case, "file", "case.toml"), "blocks",
+                                f"particle id {int(st.id[worst])} at {st.pos[worst].tolist()} lies in a "
+                                "solid wall or closer than its radius to a wall face")
 
     # trylast: walls act after any other plugin has moved particles in this hook
     @hookimpl(trylast=True)

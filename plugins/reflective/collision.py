@@ -57,6 +57,12 @@ from sphcore.api import (build_grid, by_size, cell_span, face_distance, particle
 from .corner import MAX_ACTIVE, respond, scratch
 from .facecontact import contact_normal, earliest_face, empty_grid, near_any_face
 
+#: side of the face grid's cells in particle radii. A step's box (2 r + the step) spans at
+#: most three cells per axis for steps up to 2 r; cells of 2 r list few faces each: with a
+#: 10^4-triangle mesh the kernel took 6 % of a 3D step, against 17 % with cells of 4 r
+#: (benchmarks/bench_faces.py)
+CELL_RADII = 2.0
+
 #: relative contact allowance: a plane collides only when d < r - TOL_REL * r
 TOL_REL = 1e-9
 
@@ -119,8 +125,8 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
                  gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
     """The paper's loop for particle i (earliest contact first, until inside or the guard);
     returns 1 if the guard put it back at pos0, else 0. Planes and faces compete for the
-    earliest contact; from the third reflection of a step, a contact that touches two or
-    more walls is resolved as one (:mod:`.corner`)."""
+    earliest contact; when a wall is met a second time in the step and the contact touches
+    two or more walls, that contact is resolved as one (:mod:`.corner`)."""
     dim = pos.shape[1]
     nplanes = normals.shape[0]
     guarded = 0
@@ -171,9 +177,18 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
             n0 = normals[best, 0]
             n1 = normals[best, 1]
             n2 = normals[best, 2] if dim == 3 else 0.0
+        # a wall met again in this step means ping-pong between walls (a wedge): then the
+        # contact is resolved with every wall touching there at once (wi[11:19]: the last
+        # eight walls met, planes by index, faces after them)
+        wall = best if face < 0 else nplanes + face
+        revisit = False
+        for h in range(min(count, 8)):
+            if wi[11 + h] == wall:
+                revisit = True
+        wi[11 + count % 8] = wall
         count += 1
-        if count >= 3 and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart,
-                                  gitems, a0, a1, a2, r, cr, ws, wi):
+        if revisit and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart,
+                               gitems, a0, a1, a2, r, cr, ws, wi):
             continue
         depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
         u = vel[i, 0] * n0 + vel[i, 1] * n1
@@ -301,10 +316,10 @@ def _inout(name, a, shape):
 
 def face_arrays(faces, dim, radius):
     """Kernel arguments (verts, glo, ginv, gshape, gstart, gitems) for ``faces`` (a
-    :class:`sphcore.faces.Faces` or None), the grid's cells 4 radii wide (m)."""
+    :class:`sphcore.faces.Faces` or None), the grid's cells CELL_RADII radii wide (m)."""
     if faces is None or faces.count == 0:
         return empty_grid(dim)
-    grid = build_grid(faces.verts, 4.0 * float(radius))
+    grid = build_grid(faces.verts, CELL_RADII * float(radius))
     return (np.ascontiguousarray(faces.verts, dtype=np.float64),) + grid.arrays()
 
 

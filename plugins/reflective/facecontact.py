@@ -71,6 +71,14 @@ def earliest_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, 
                     # the contact at r comes no later than at lim; a start within an ulp of
                     # r (a touching start, a corner's contact point) may round to "never"
                     t = min(first_contact(verts, f, a0, a1, a2, b0, b1, b2, r), tl)
+                    if t == 0.0:
+                        # touching (or overlapping) at the start: a contact only when the path
+                        # heads towards the face (the distance along a line to a convex set is
+                        # convex: a path leaving it never comes closer)
+                        q0, q1, q2 = nearest_point(verts, f, a0, a1, a2)
+                        away = (a0 - q0) * (b0 - a0) + (a1 - q1) * (b1 - a1) + (a2 - q2) * (b2 - a2)
+                        if away >= 0.0 and (a0 - q0) ** 2 + (a1 - q1) ** 2 + (a2 - q2) ** 2 > 0.0:
+                            continue
                     if t < fbest:
                         fbest = t
                         best = f
