@@ -1,0 +1,155 @@
+"""The wall share s, its gradient G and the moment T g of finite wall faces, exact.
+
+The same boundary integrals as ``share.py`` (module doc there: Kulasegaram et al. 2004,
+Feldman & Bonet 2007, Ferrand et al. 2013), over the faces of ``sphcore.faces.Faces``
+instead of the clipped planes. For the region O outside the fluid bounded by closed faces
+(an obstacle, a tank) the divergence theorem gives, face by face,
+
+    s = sum_f d_f int_{f} (K(2h) - K(r)) / r^dim dS,   G = -sum_f n_f int_f W dS,
+    T g = -sum_f (n_f . g) int_f W y dS,
+
+with n_f the face's normal into the fluid and d_f = n_f . (x - x_f) its SIGNED distance:
+a face seen from behind (x on its solid side's plane, beyond its edges) enters with
+d_f < 0. The integrand vanishes beyond r = 2h, so only faces within 2h count, and the sum
+is exact for any polyhedral O: concave corners, obstacles standing on a plane wall (the
+shared face cancels against the plane's; volumes add) and meshes. Each face is a segment
+(2D: ``faces._segment2`` over its extent along the line) or a triangle (3D: the signed
+triangles (foot point, edge) of ``faces._edge3`` over its three edges, plus the polar
+sector when the foot point lies on the triangle, exactly as ``faces._face3`` does for a
+clipped plane). The integrals depend on |d_f| and on the face's extent in its plane;
+the sign of d_f multiplies s and enters T g.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .faces import PS2_, _EPS, _edge3, _lval, _segment2
+from .tables import PS, PW, PW2
+
+
+@njit(cache=True)
+def segment_terms(kid, x0, x1, verts, f, h):
+    """(s, int W dt, int W t dt, tau0, tau1, n0, n1, d) of segment f for the point x (units
+    of h; tau the segment's direction, n its normal (tau1, -tau0), d the signed distance)."""
+    p0, p1 = verts[f, 0, 0], verts[f, 0, 1]
+    e0, e1 = verts[f, 1, 0] - p0, verts[f, 1, 1] - p1
+    ln = math.sqrt(e0 * e0 + e1 * e1)
+    t0, t1 = e0 / ln, e1 / ln
+    n0, n1 = t1, -t0
+    d = (n0 * (x0 - p0) + n1 * (x1 - p1)) / h
+    lo = (t0 * (p0 - x0) + t1 * (p1 - x1)) / h
+    hi = lo + ln / h
+    s, w, wt = _segment2(kid, abs(d), lo, hi)
+    return (s if d >= 0.0 else -s), w, wt, t0, t1, n0, n1, d
+
+
+@njit(cache=True)
+def triangle_terms(kid, x0, x1, x2, verts, f, h):
+    """(s, int W dA, in-plane int W y dA (3), n (3), d) of triangle f for the point x (units
+    of h; n its unit normal, d the signed distance)."""
+    a = verts[f, 0]
+    u0, u1, u2 = verts[f, 1, 0] - a[0], verts[f, 1, 1] - a[1], verts[f, 1, 2] - a[2]
+    v0, v1, v2 = verts[f, 2, 0] - a[0], verts[f, 2, 1] - a[1], verts[f, 2, 2] - a[2]
+    n0, n1, n2 = u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
+    ln = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    n0, n1, n2 = n0 / ln, n1 / ln, n2 / ln
+    d = (n0 * (x0 - a[0]) + n1 * (x1 - a[1]) + n2 * (x2 - a[2])) / h
+    ad = abs(d)
+    if ad >= 2.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, n0, n1, n2, d
+    # orthonormal (e1, e2) with e1 x e2 = n: the vertices, seen from the foot point, run
+    # counter-clockwise (the right-hand orientation of the face)
+    if abs(n0) < 0.9:
+        c0, c1, c2 = 0.0, n2, -n1
+    else:
+        c0, c1, c2 = -n2, 0.0, n0
+    cn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+    e10, e11, e12 = c0 / cn, c1 / cn, c2 / cn
+    e20, e21, e22 = n1 * e12 - n2 * e11, n2 * e10 - n0 * e12, n0 * e11 - n1 * e10
+    # in-plane coordinates of the vertices from the foot point (units of h)
+    q = np.empty((3, 2))
+    for j in range(3):
+        w0, w1, w2 = verts[f, j, 0] - x0, verts[f, j, 1] - x1, verts[f, j, 2] - x2
+        q[j, 0] = (w0 * e10 + w1 * e11 + w2 * e12) / h
+        q[j, 1] = (w0 * e20 + w1 * e21 + w2 * e22) / h
+    inside = 1.0
+    s = 0.0
+    w = 0.0
+    phi = 0.0
+    m0 = 0.0
+    m1 = 0.0
+    m2 = 0.0
+    for j in range(3):
+        k = (j + 1) % 3
+        tx, ty = q[k, 0] - q[j, 0], q[k, 1] - q[j, 1]
+        tl = math.sqrt(tx * tx + ty * ty)
+        tx, ty = tx / tl, ty / tl
+        ax, ay = -ty, tx  # inward normal of the edge (counter-clockwise polygon)
+        b = ax * q[j, 0] + ay * q[j, 1]  # inside: a . u >= b
+        if b > 0.0:
+            inside = 0.0  # the foot point lies beyond this edge
+        lo = tx * q[j, 0] + ty * q[j, 1]
+        hi = tx * q[k, 0] + ty * q[k, 1]
+        p = -b
+        p = max(p, _EPS) if p >= 0.0 else min(p, -_EPS)  # foot on the line counts as inside
+        es, ew, eq, ephi = _edge3(kid, ad, p, lo, hi)
+        s += es
+        w += ew
+        phi += ephi
+        m0 -= eq * (ax * e10 + ay * e20)
+        m1 -= eq * (ax * e11 + ay * e21)
+        m2 -= eq * (ax * e12 + ay * e22)
+    arc = 2.0 * math.pi * inside - phi
+    dps_d = _lval(PS, kid, 1, ad, 1)
+    psw_d = _lval(PW, kid, 1, ad, 0)
+    s += (ad * PS2_[kid] - dps_d) * arc - dps_d * phi
+    w += (PW2[kid, 1] - psw_d) * arc - psw_d * phi
+    return (s if d >= 0.0 else -s), w, m0, m1, m2, n0, n1, n2, d
+
+
+@njit(cache=True)
+def face_point(x0, x1, x2, verts, faces_near, count, kernel_id, h, g0, g1, g2):
+    """(s, G0, G1, G2, Tg0, Tg1, Tg2) at x from the faces ``faces_near[:count]`` (each once);
+    the units of ``share.wall_point``."""
+    dim = verts.shape[2]
+    s = 0.0
+    gr0 = 0.0
+    gr1 = 0.0
+    gr2 = 0.0
+    t0 = 0.0
+    t1 = 0.0
+    t2 = 0.0
+    for c in range(count):
+        f = faces_near[c]
+        if dim == 2:
+            fs, fw, fwt, ta, tb, n0, n1, d = segment_terms(kernel_id, x0, x1, verts, f, h)
+            n2 = 0.0
+            m0, m1, m2 = fwt * ta, fwt * tb, 0.0
+        else:
+            fs, fw, m0, m1, m2, n0, n1, n2, d = triangle_terms(kernel_id, x0, x1, x2, verts, f, h)
+        s += fs
+        gr0 -= n0 * fw / h
+        gr1 -= n1 * fw / h
+        gr2 -= n2 * fw / h
+        ng = n0 * g0 + n1 * g1 + n2 * g2
+        t0 -= ng * (m0 - d * n0 * fw)
+        t1 -= ng * (m1 - d * n1 * fw)
+        t2 -= ng * (m2 - d * n2 * fw)
+    return s, gr0, gr1, gr2, t0, t1, t2
+
+
+def face_terms_at(x, verts, kernel_id, h, gravity=(0.0, 0.0, 0.0)):
+    """Python convenience for tests: (s, G (dim,), T g (dim,)) at x from every face."""
+    x = np.asarray(x, float)
+    dim = x.size
+    g = np.zeros(3)
+    g[: len(gravity)] = gravity
+    verts = np.ascontiguousarray(verts, dtype=float)
+    ids = np.arange(verts.shape[0], dtype=np.int64)
+    r = face_point(x[0], x[1], x[2] if dim == 3 else 0.0, verts, ids, ids.size, int(kernel_id), float(h),
+                   g[0], g[1], g[2])
+    return r[0], np.array(r[1:1 + dim]), np.array(r[4:4 + dim])
