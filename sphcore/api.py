@@ -12,6 +12,7 @@
 - geometry: :class:`Planes`, and for numba kernels :func:`plane_distance`,
   :func:`particle_distance`; finite walls :class:`Faces` (``ctx.case.faces``) with their
   :class:`FaceGrid` (:func:`build_grid`), and for numba kernels :func:`nearest_point`,
+  :func:`box_cells`,
   :func:`face_distance`, :func:`first_contact` (swept sphere), :func:`cell_span`;
 - neighbours and kernels for numba kernels: :class:`CellGrid` (its ``.view`` is a
   :class:`Grid`), :func:`cell_of`, :func:`cell_range` (the one neighbour walk),
@@ -32,7 +33,7 @@ from .context import RunContext
 from .equations import Fields, WallTerms
 from .errors import CaseError, Instability, OutputError
 from .facegeom import face_distance, first_contact, nearest_point
-from .facegrid import FaceGrid, build_grid, cell_span
+from .facegrid import FaceGrid, box_cells, build_grid, cell_span
 from .faces import Faces
 from .geometry import Planes, particle_distance, plane_distance
 from .hookspecs import hookimpl
@@ -50,7 +51,7 @@ __all__ = [
     "hookimpl", "Option", "CaseError", "Instability", "OutputError",
     "RunContext", "Params", "ParticleState", "Sources", "Fields", "WallTerms", "FLUID", "SPHERE", "GHOST",
     "Planes", "plane_distance", "particle_distance",
-    "Faces", "FaceGrid", "build_grid", "cell_span", "nearest_point", "face_distance", "first_contact",
+    "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "face_distance", "first_contact",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
     "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",
     "eos", "ScheduledWriter", "Schedule", "schedule_options", "write_atomically", "by_size",

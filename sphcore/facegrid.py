@@ -106,3 +106,16 @@ def cell_span(lo, inv_cell, shape, c, xmin, xmax):
     if a > b:
         return 1, 0
     return int(a), int(b)
+
+
+@njit(cache=True, inline="always")
+def box_cells(lo, inv_cell, shape, dim, a0, a1, a2, b0, b1, b2, pad):
+    """(x0, x1, y0, y1, z0, z1): the cells covering the box of the segment A -> B inflated
+    by ``pad`` (m) on every side (a2, b2 ignored in 2D); empty ranges where it misses."""
+    x0, x1 = cell_span(lo, inv_cell, shape, 0, min(a0, b0) - pad, max(a0, b0) + pad)
+    y0, y1 = cell_span(lo, inv_cell, shape, 1, min(a1, b1) - pad, max(a1, b1) + pad)
+    if dim == 3:
+        z0, z1 = cell_span(lo, inv_cell, shape, 2, min(a2, b2) - pad, max(a2, b2) + pad)
+    else:
+        z0, z1 = 0, 0
+    return x0, x1, y0, y1, z0, z1

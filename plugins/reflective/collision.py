@@ -51,7 +51,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from sphcore.api import (build_grid, by_size, cell_span, face_distance, particle_distance,
+from sphcore.api import (box_cells, build_grid, by_size, face_distance, particle_distance,
                          plane_distance)
 
 from .corner import MAX_ACTIVE, respond, scratch
@@ -239,9 +239,7 @@ def _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart, git
             c[m] = offsets[k] + r
             m += 1
     if verts.shape[0]:
-        x0, x1 = cell_span(glo, ginv, gshape, 0, a0 - touch, a0 + touch)
-        y0, y1 = cell_span(glo, ginv, gshape, 1, a1 - touch, a1 + touch)
-        z0, z1 = cell_span(glo, ginv, gshape, 2, a2 - touch, a2 + touch) if dim == 3 else (0, 0)
+        x0, x1, y0, y1, z0, z1 = box_cells(glo, ginv, gshape, dim, a0, a1, a2, a0, a1, a2, touch)
         for x in range(x0, x1 + 1):
             for y in range(y0, y1 + 1):
                 for z in range(z0, z1 + 1):

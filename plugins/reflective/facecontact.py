@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-from sphcore.api import cell_span, face_distance, first_contact, nearest_point
+from sphcore.api import box_cells, face_distance, first_contact, nearest_point
 
 
 @njit(cache=True)
@@ -30,10 +30,7 @@ def near_any_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, 
         return False
     dim = verts.shape[2]
     ln = math.sqrt((b0 - a0) ** 2 + (b1 - a1) ** 2 + (b2 - a2) ** 2)
-    x0, x1 = cell_span(lo, inv_cell, shape, 0, min(a0, b0) - lim, max(a0, b0) + lim)
-    y0, y1 = cell_span(lo, inv_cell, shape, 1, min(a1, b1) - lim, max(a1, b1) + lim)
-    z0, z1 = (cell_span(lo, inv_cell, shape, 2, min(a2, b2) - lim, max(a2, b2) + lim)
-              if dim == 3 else (0, 0))
+    x0, x1, y0, y1, z0, z1 = box_cells(lo, inv_cell, shape, dim, a0, a1, a2, b0, b1, b2, lim)
     for x in range(x0, x1 + 1):
         for y in range(y0, y1 + 1):
             for z in range(z0, z1 + 1):
@@ -53,10 +50,7 @@ def earliest_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, 
         return best, fbest
     dim = verts.shape[2]
     ln = math.sqrt((b0 - a0) ** 2 + (b1 - a1) ** 2 + (b2 - a2) ** 2)
-    x0, x1 = cell_span(lo, inv_cell, shape, 0, min(a0, b0) - r, max(a0, b0) + r)
-    y0, y1 = cell_span(lo, inv_cell, shape, 1, min(a1, b1) - r, max(a1, b1) + r)
-    z0, z1 = (cell_span(lo, inv_cell, shape, 2, min(a2, b2) - r, max(a2, b2) + r)
-              if dim == 3 else (0, 0))
+    x0, x1, y0, y1, z0, z1 = box_cells(lo, inv_cell, shape, dim, a0, a1, a2, b0, b1, b2, r)
     for x in range(x0, x1 + 1):
         for y in range(y0, y1 + 1):
             for z in range(z0, z1 + 1):

@@ -275,9 +275,18 @@ def _face3(kid, x0, x1, x2, normals, offsets, h, k, d):
         m0 -= eq * (ax * e1[0] + ay * e2[0])
         m1 -= eq * (ax * e1[1] + ay * e2[1])
         m2 -= eq * (ax * e1[2] + ay * e2[2])
+    s, w = sector(kid, d, inside, phi, s, w)
+    return s, w, m0, m1, m2
+
+
+@njit(cache=True, inline="always")
+def sector(kid, d, inside, phi, s, w):
+    """(s, w) plus the polar sector of a face polygon inside the support disc: angle
+    2 pi [foot in the polygon] - phi (phi the edges' in-disc angles), integrand the
+    constant Phi(2h) = Psi(2) - Psi(d), and the -Psi(d) phi terms of its edges."""
     arc = 2.0 * math.pi * inside - phi
     dps_d = _lval(PS, kid, 1, d, 1)
     psw_d = _lval(PW, kid, 1, d, 0)
     s += (d * PS2_[kid] - dps_d) * arc - dps_d * phi
     w += (PW2[kid, 1] - psw_d) * arc - psw_d * phi
-    return s, w, m0, m1, m2
+    return s, w

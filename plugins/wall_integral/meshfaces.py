@@ -27,8 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .faces import PS2_, _EPS, _edge3, _lval, _segment2
-from .tables import PS, PW, PW2
+from .faces import _EPS, _edge3, _segment2, sector
+from .share import add_face
 
 
 @njit(cache=True)
@@ -103,11 +103,7 @@ def triangle_terms(kid, x0, x1, x2, verts, f, h):
         m0 -= eq * (ax * e10 + ay * e20)
         m1 -= eq * (ax * e11 + ay * e21)
         m2 -= eq * (ax * e12 + ay * e22)
-    arc = 2.0 * math.pi * inside - phi
-    dps_d = _lval(PS, kid, 1, ad, 1)
-    psw_d = _lval(PW, kid, 1, ad, 0)
-    s += (ad * PS2_[kid] - dps_d) * arc - dps_d * phi
-    w += (PW2[kid, 1] - psw_d) * arc - psw_d * phi
+    s, w = sector(kid, ad, inside, phi, s, w)
     return (s if d >= 0.0 else -s), w, m0, m1, m2, n0, n1, n2, d
 
 
@@ -131,14 +127,8 @@ def face_point(x0, x1, x2, verts, faces_near, count, kernel_id, h, g0, g1, g2):
             m0, m1, m2 = fwt * ta, fwt * tb, 0.0
         else:
             fs, fw, m0, m1, m2, n0, n1, n2, d = triangle_terms(kernel_id, x0, x1, x2, verts, f, h)
-        s += fs
-        gr0 -= n0 * fw / h
-        gr1 -= n1 * fw / h
-        gr2 -= n2 * fw / h
-        ng = n0 * g0 + n1 * g1 + n2 * g2
-        t0 -= ng * (m0 - d * n0 * fw)
-        t1 -= ng * (m1 - d * n1 * fw)
-        t2 -= ng * (m2 - d * n2 * fw)
+        s, gr0, gr1, gr2, t0, t1, t2 = add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0, m1, m2,
+                                                n0, n1, n2, d, h, g0, g1, g2)
     return s, gr0, gr1, gr2, t0, t1, t2
 
 

@@ -176,15 +176,24 @@ def _point_core(x0, x1, x2, normals, offsets, kernel_id, h, g0, g1, g2):
             m1 = fwt * ty
         else:
             fs, fw, m0, m1, m2 = _face3(kernel_id, x0, x1, x2, normals, offsets, h, k, d)
-        s += fs
-        gr0 -= n0 * fw / h
-        gr1 -= n1 * fw / h
-        gr2 -= n2 * fw / h
-        # m_k = int W y dS = -d n_k int W dS + in-plane moment; T g = -sum (n_k . g) m_k
-        ng = n0 * g0 + n1 * g1 + n2 * g2
-        t0 -= ng * (m0 - d * n0 * fw)
-        t1 -= ng * (m1 - d * n1 * fw)
-        t2 -= ng * (m2 - d * n2 * fw)
+        s, gr0, gr1, gr2, t0, t1, t2 = add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0, m1, m2,
+                                                n0, n1, n2, d, h, g0, g1, g2)
+    return s, gr0, gr1, gr2, t0, t1, t2
+
+
+@njit(cache=True, inline="always")
+def add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0, m1, m2, n0, n1, n2, d, h, g0, g1, g2):
+    """One face's part of (s, G, T g): its share fs, G -= n int W dS / h, and with the
+    face's first moment m = int W y dS = -d n int W dS + the in-plane moment (m0, m1, m2),
+    T g -= (n . g) m (d, fs, fw, m in units of h; n the face's normal into the fluid)."""
+    s += fs
+    gr0 -= n0 * fw / h
+    gr1 -= n1 * fw / h
+    gr2 -= n2 * fw / h
+    ng = n0 * g0 + n1 * g1 + n2 * g2
+    t0 -= ng * (m0 - d * n0 * fw)
+    t1 -= ng * (m1 - d * n1 * fw)
+    t2 -= ng * (m2 - d * n2 * fw)
     return s, gr0, gr1, gr2, t0, t1, t2
 
 
