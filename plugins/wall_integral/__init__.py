@@ -27,6 +27,10 @@ needs no wall particles (the paper's walls stay planes), it is exact for the geo
 it is consistent with the interior on the lattice the blocks are filled with. Its measured
 state (hydrostatic tank, wall-pressure experiments) is in docs/wall_pressure.md.
 
+Finite walls (``[[domain.walls]]``: obstacles, meshes) add their exact terms too
+(:mod:`.facewalls`, :mod:`.meshfaces`), without the lattice-error correction the planes
+have (see :mod:`.facewalls`).
+
 Use it beside ``reflective``, which keeps every particle inside:
 ``[plugins] use = ["reflective", "wall_integral", ...]``. No options.
 
@@ -49,20 +53,21 @@ class WallIntegralPlugin:
         self.grad = np.zeros((0, 2))
         self.hydro = np.zeros((0, 2))
         self._table = None
+        self.walls = None  # finite faces (sphcore.faces.Faces) or None
+        self._faces = None
 
     @hookimpl
     def sph_configure(self, case):
         file = getattr(case, "file", "case.toml")
         if not case.config["physics"]["sph"]:
             raise CaseError(file, "plugins.use", "wall_integral completes SPH sums; physics.sph is false")
-        if case.planes.count == 0:
-            raise CaseError(file, "plugins.use", "wall_integral needs wall planes ([domain] min/max or planes)")
         faces = getattr(case, "faces", None)
-        if faces is not None and faces.count:
-            raise CaseError(file, "domain.walls", f"wall_integral completes the kernel at wall planes only; the "
-                            f"case has {faces.count} finite wall faces, which it would leave without pressure")
+        self.walls = faces if faces is not None and faces.count else None
+        if case.planes.count == 0 and self.walls is None:
+            raise CaseError(file, "plugins.use", "wall_integral needs walls ([domain] min/max, planes or walls)")
         self.normals = np.ascontiguousarray(case.planes.normals, dtype=np.float64)
         self.offsets = np.ascontiguousarray(case.planes.offsets, dtype=np.float64)
+        self._faces = None  # (verts, grid arrays, stamps), built on first use (the grid needs h)
 
     @hookimpl
     def sph_wall_terms(self, ctx, terms):
@@ -86,4 +91,15 @@ class WallIntegralPlugin:
         np.add(terms.grad, self.grad, out=terms.grad)
         np.add(terms.hydro, self.hydro, out=terms.hydro)
         near_wall_projector(st.pos, self.normals, self.offsets, prm.support, terms.normals)
-        ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(self.share))
+        if self.walls is not None:
+            from sphcore.api import build_grid
+
+            from .facewalls import face_wall_terms, stamps_for
+            if self._faces is None:  # cells of 2h: a particle's support box spans <= 3 per axis
+                verts = np.ascontiguousarray(self.walls.verts, dtype=np.float64)
+                self._faces = (verts, build_grid(verts, prm.support).arrays(), stamps_for(self.walls.count))
+            verts, grid, stamps = self._faces
+            full = float(self._table[1][self._table[1].shape[0] - 1, 2])  # interior lattice sum
+            face_wall_terms(st.pos, verts, *grid, stamps, prm.kernel_id, prm.h, prm.gravity, full,
+                            terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
+        ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(terms.share))

@@ -71,11 +71,15 @@ def triangle_terms(kid, x0, x1, x2, verts, f, h):
     e10, e11, e12 = c0 / cn, c1 / cn, c2 / cn
     e20, e21, e22 = n1 * e12 - n2 * e11, n2 * e10 - n0 * e12, n0 * e11 - n1 * e10
     # in-plane coordinates of the vertices from the foot point (units of h)
-    q = np.empty((3, 2))
-    for j in range(3):
-        w0, w1, w2 = verts[f, j, 0] - x0, verts[f, j, 1] - x1, verts[f, j, 2] - x2
-        q[j, 0] = (w0 * e10 + w1 * e11 + w2 * e12) / h
-        q[j, 1] = (w0 * e20 + w1 * e21 + w2 * e22) / h
+    w0, w1, w2 = verts[f, 0, 0] - x0, verts[f, 0, 1] - x1, verts[f, 0, 2] - x2
+    qa0 = (w0 * e10 + w1 * e11 + w2 * e12) / h
+    qa1 = (w0 * e20 + w1 * e21 + w2 * e22) / h
+    w0, w1, w2 = verts[f, 1, 0] - x0, verts[f, 1, 1] - x1, verts[f, 1, 2] - x2
+    qb0 = (w0 * e10 + w1 * e11 + w2 * e12) / h
+    qb1 = (w0 * e20 + w1 * e21 + w2 * e22) / h
+    w0, w1, w2 = verts[f, 2, 0] - x0, verts[f, 2, 1] - x1, verts[f, 2, 2] - x2
+    qc0 = (w0 * e10 + w1 * e11 + w2 * e12) / h
+    qc1 = (w0 * e20 + w1 * e21 + w2 * e22) / h
     inside = 1.0
     s = 0.0
     w = 0.0
@@ -84,16 +88,21 @@ def triangle_terms(kid, x0, x1, x2, verts, f, h):
     m1 = 0.0
     m2 = 0.0
     for j in range(3):
-        k = (j + 1) % 3
-        tx, ty = q[k, 0] - q[j, 0], q[k, 1] - q[j, 1]
+        if j == 0:
+            pj0, pj1, pk0, pk1 = qa0, qa1, qb0, qb1
+        elif j == 1:
+            pj0, pj1, pk0, pk1 = qb0, qb1, qc0, qc1
+        else:
+            pj0, pj1, pk0, pk1 = qc0, qc1, qa0, qa1
+        tx, ty = pk0 - pj0, pk1 - pj1
         tl = math.sqrt(tx * tx + ty * ty)
         tx, ty = tx / tl, ty / tl
         ax, ay = -ty, tx  # inward normal of the edge (counter-clockwise polygon)
-        b = ax * q[j, 0] + ay * q[j, 1]  # inside: a . u >= b
+        b = ax * pj0 + ay * pj1  # inside: a . u >= b
         if b > 0.0:
             inside = 0.0  # the foot point lies beyond this edge
-        lo = tx * q[j, 0] + ty * q[j, 1]
-        hi = tx * q[k, 0] + ty * q[k, 1]
+        lo = tx * pj0 + ty * pj1
+        hi = tx * pk0 + ty * pk1
         p = -b
         p = max(p, _EPS) if p >= 0.0 else min(p, -_EPS)  # foot on the line counts as inside
         es, ew, eq, ephi = _edge3(kid, ad, p, lo, hi)
