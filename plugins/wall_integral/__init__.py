@@ -55,6 +55,7 @@ class WallIntegralPlugin:
         self._table = None
         self.walls = None  # finite faces (sphcore.faces.Faces) or None
         self._faces = None
+        self._epoch = 0
 
     @hookimpl
     def sph_configure(self, case):
@@ -68,6 +69,7 @@ class WallIntegralPlugin:
         self.normals = np.ascontiguousarray(case.planes.normals, dtype=np.float64)
         self.offsets = np.ascontiguousarray(case.planes.offsets, dtype=np.float64)
         self._faces = None  # (verts, grid arrays, stamps), built on first use (the grid needs h)
+        self._epoch = 0
 
     @hookimpl
     def sph_wall_terms(self, ctx, terms):
@@ -100,6 +102,7 @@ class WallIntegralPlugin:
                 self._faces = (verts, build_grid(verts, prm.support).arrays(), stamps_for(self.walls.count))
             verts, grid, stamps = self._faces
             full = float(self._table[1][self._table[1].shape[0] - 1, 2])  # interior lattice sum
-            face_wall_terms(st.pos, verts, *grid, stamps, prm.kernel_id, prm.h, prm.gravity, full,
-                            terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
+            self._epoch += 1  # the face marks of this call differ from every earlier one's
+            face_wall_terms(st.pos, verts, *grid, stamps, self._epoch, prm.kernel_id, prm.h, prm.gravity,
+                            full, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
         ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(terms.share))

@@ -29,19 +29,23 @@ from .share import add_face
 
 
 @njit(cache=True, parallel=True)
-def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, kernel_id, h, gravity, full,
-                    share, grad, hydro, fill, q):
+def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, epoch, kernel_id, h, gravity,
+                    full, share, grad, hydro, fill, q):
     """Add the faces' terms to share (n,), grad (n, dim), hydro (n, dim), fill (n,) and the
     projector q (n, dim, dim) of every particle within 2h (m) of a face. ``stamps``
     (blocks, nf) int64: scratch marking the faces already taken for a particle (each block
-    of particles runs on one thread). ``full``: the interior's lattice neighbour sum."""
+    of particles runs on one thread), with the marks epoch * (n + 1) + i: ``epoch`` must
+    differ between calls (a mark left by the same particle index in an earlier call would
+    hide the face). ``full``: the interior's lattice neighbour sum."""
     n, dim = pos.shape
     g0, g1 = gravity[0], gravity[1]
     g2 = gravity[2] if dim == 3 else 0.0
     support = 2.0 * h
     rows = stamps.shape[0]
+    first_mark = epoch * (n + 1)
     for b in prange(rows):
         for i in range(b * n // rows, (b + 1) * n // rows):
+            mark = first_mark + i
             x0, x1 = pos[i, 0], pos[i, 1]
             x2 = pos[i, 2] if dim == 3 else 0.0
             cx0, cx1, cy0, cy1, cz0, cz1 = box_cells(glo, ginv, gshape, dim, x0, x1, x2, x0, x1, x2, support)
@@ -61,9 +65,9 @@ def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, kerne
                         c = (cx * gshape[1] + cy) * gshape[2] + cz
                         for e in range(gstart[c], gstart[c + 1]):
                             f = gitems[e]
-                            if stamps[b, f] == i:
+                            if stamps[b, f] == mark:
                                 continue
-                            stamps[b, f] = i
+                            stamps[b, f] = mark
                             qx, qy, qz = nearest_point(verts, f, x0, x1, x2)
                             dist = math.sqrt((x0 - qx) ** 2 + (x1 - qy) ** 2 + (x2 - qz) ** 2)
                             if dist >= support:
@@ -95,8 +99,8 @@ def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, kerne
             if dim == 3:
                 grad[i, 2] += gr2
                 hydro[i, 2] += t2
-            base = fill[i] if fill[i] > 0.0 else full
-            fill[i] = max(base - s, 1e-3 * full)
+            ref = fill[i] if fill[i] > 0.0 else full
+            fill[i] = max(ref - s, 1e-3 * full)
             for a in range(dim):
                 for bb in range(dim):
                     acc = 0.0
