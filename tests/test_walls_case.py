@@ -204,3 +204,12 @@ def test_the_wall_model_holds_a_tank_with_a_step_at_rest(tmp_path):
     assert gauge["particles_lost"] == 0
     assert gauge["pressure_max_layer_err"] < 0.05
     assert gauge["max_displacement_m"] < 0.02 * 1.5
+
+
+def test_ghosts_refuse_finite_walls_and_say_what_to_use(tmp_path):
+    text = case_text('[[domain.walls]]\nshape = "box"\nmin = [0.6, 0.0]\nmax = [0.8, 0.2]',
+                     plugins='["reflective", "ghost"]')
+    with pytest.raises(CaseError) as err:
+        load(tmp_path, text)
+    assert err.value.key == "domain.walls" and "mirrors across wall planes only" in err.value.expected
+    assert "wall_integral" in err.value.expected

@@ -73,7 +73,7 @@ class GhostPlugin:
         faces = getattr(case, "faces", None)
         if faces is not None and faces.count:
             raise CaseError(file, "domain.walls", f"the ghost plugin mirrors across wall planes only; the case "
-                            f"has {faces.count} finite wall faces: use reflective (and wall_integral on planes)")
+                            f"has {faces.count} finite wall faces: use reflective and wall_integral")
         if planes.count > MAX_PLANES:
             raise CaseError(file, "domain.planes", f"the ghost plugin handles at most {MAX_PLANES} wall planes, "
                             f"got {planes.count}")
