@@ -23,7 +23,7 @@ from numba import njit, prange
 
 from sphcore.api import box_cells, nearest_point
 
-from .meshfaces import segment_terms, triangle_terms
+from .meshfaces import face_part
 from .normals import _add_direction
 from .share import add_face
 
@@ -77,13 +77,7 @@ def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, epoch
                                     basis, count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a],
                                                                   q[i, 2, a] if dim == 3 else 0.0)
                             near += 1
-                            if dim == 2:
-                                fs, fw, fwt, ta, tb, n0, n1, d = segment_terms(kernel_id, x0, x1, verts, f, h)
-                                n2 = 0.0
-                                m0, m1, m2 = fwt * ta, fwt * tb, 0.0
-                            else:
-                                fs, fw, m0, m1, m2, n0, n1, n2, d = triangle_terms(kernel_id, x0, x1, x2,
-                                                                                   verts, f, h)
+                            fs, fw, m0, m1, m2, n0, n1, n2, d = face_part(kernel_id, x0, x1, x2, verts, f, h)
                             s, gr0, gr1, gr2, t0, t1, t2 = add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0,
                                                                     m1, m2, n0, n1, n2, d, h, g0, g1, g2)
                             if dist > 0.0:

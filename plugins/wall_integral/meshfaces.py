@@ -116,26 +116,24 @@ def triangle_terms(kid, x0, x1, x2, verts, f, h):
     return (s if d >= 0.0 else -s), w, m0, m1, m2, n0, n1, n2, d
 
 
+@njit(cache=True, inline="always")
+def face_part(kid, x0, x1, x2, verts, f, h):
+    """(fs, fw, m0, m1, m2, n0, n1, n2, d) of face f at x, a segment (2D) or a triangle (3D):
+    its share, int W dS, in-plane first moment, unit normal and signed distance (units of
+    h), the arguments of ``share.add_face``."""
+    if verts.shape[2] == 2:
+        fs, fw, fwt, ta, tb, n0, n1, d = segment_terms(kid, x0, x1, verts, f, h)
+        return fs, fw, fwt * ta, fwt * tb, 0.0, n0, n1, 0.0, d
+    return triangle_terms(kid, x0, x1, x2, verts, f, h)
+
+
 @njit(cache=True)
 def face_point(x0, x1, x2, verts, faces_near, count, kernel_id, h, g0, g1, g2):
     """(s, G0, G1, G2, Tg0, Tg1, Tg2) at x from the faces ``faces_near[:count]`` (each once);
     the units of ``share.wall_point``."""
-    dim = verts.shape[2]
-    s = 0.0
-    gr0 = 0.0
-    gr1 = 0.0
-    gr2 = 0.0
-    t0 = 0.0
-    t1 = 0.0
-    t2 = 0.0
+    s = gr0 = gr1 = gr2 = t0 = t1 = t2 = 0.0
     for c in range(count):
-        f = faces_near[c]
-        if dim == 2:
-            fs, fw, fwt, ta, tb, n0, n1, d = segment_terms(kernel_id, x0, x1, verts, f, h)
-            n2 = 0.0
-            m0, m1, m2 = fwt * ta, fwt * tb, 0.0
-        else:
-            fs, fw, m0, m1, m2, n0, n1, n2, d = triangle_terms(kernel_id, x0, x1, x2, verts, f, h)
+        fs, fw, m0, m1, m2, n0, n1, n2, d = face_part(kernel_id, x0, x1, x2, verts, faces_near[c], h)
         s, gr0, gr1, gr2, t0, t1, t2 = add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0, m1, m2,
                                                 n0, n1, n2, d, h, g0, g1, g2)
     return s, gr0, gr1, gr2, t0, t1, t2
