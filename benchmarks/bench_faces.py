@@ -8,6 +8,11 @@ step), and the kernel's share of the step. The cost should not grow with F: each
 particle tests only the faces listed in the grid cells around it.
 
     python benchmarks/bench_faces.py [--faces 0 80 1000 10000] [--steps 5] [--repeat 5]
+    python benchmarks/bench_faces.py --wall-model     # the wall model's share instead
+
+With ``--wall-model`` each F runs the case with reflective walls alone and with the wall
+model (``wall_integral``: planes and faces) in alternation and prints the wall model's
+share of a step, (t_model - t_alone) / t_model, medians.
 
 Figures are printed, never asserted: run by hand on a quiet machine.
 """
@@ -43,12 +48,13 @@ max = [0.5, 0.5, 0.42]
 dx = 0.01
 [physics]
 gravity = [0.0, 0.0, -9.81]
+modified_pressure = false
 [time]
 t_end = 10.0
 [output]
 progress = "off"
 [plugins]
-use = ["reflective"]
+use = {plugins}
 """
 
 
@@ -73,15 +79,15 @@ def sphere_mesh(path: Path, faces: int, centre=(0.25, 0.25, 0.2), radius=0.1) ->
     return len(tris)
 
 
-def setup(tmp: Path, faces: int):
-    d = tmp / f"f{faces}"
+def setup(tmp: Path, faces: int, plugins='["reflective"]'):
+    d = tmp / f"f{faces}{len(plugins)}"
     d.mkdir()
     walls = ""
     count = 0
     if faces:
         count = sphere_mesh(d / "sphere.stl", faces)
         walls = '[[domain.walls]]\nshape = "mesh"\nfile = "sphere.stl"'
-    (d / "case.toml").write_text(CASE.format(walls=walls))
+    (d / "case.toml").write_text(CASE.format(walls=walls, plugins=plugins))
     case, pm = runner.load(d)
     sim = Simulation(case, pm)
     sim.advance()  # compile, warm caches
@@ -93,8 +99,12 @@ def main():
     ap.add_argument("--faces", type=int, nargs="+", default=[0, 80, 1000, 10000])
     ap.add_argument("--steps", type=int, default=5)
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--wall-model", action="store_true", help="the wall model's share of a step")
     a = ap.parse_args()
     import numba
+
+    if a.wall_model:
+        return wall_model_share(a)
 
     with tempfile.TemporaryDirectory() as tmp:
         print(f"3D water at rest, a submerged sphere of F faces, numba threads={numba.get_num_threads()}, "
@@ -126,6 +136,32 @@ def main():
                 kern.append(total / a.steps)
             ts, tk = statistics.median(steps), statistics.median(kern)
             print(f"{count:>7} {st.n:>9} {1e3 * ts:>9.2f} {1e3 * tk:>10.3f} {100 * tk / ts:>6.1f}%")
+            sys.stdout.flush()
+
+
+def per_step(sim, steps):
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        sim.advance()
+    return (time.perf_counter() - t0) / steps
+
+
+def wall_model_share(a):
+    import numba
+
+    with tempfile.TemporaryDirectory() as tmp:
+        print(f"3D water at rest, a submerged sphere of F faces, numba threads={numba.get_num_threads()}, "
+              f"median of {a.repeat} alternating runs of {a.steps} steps, plain Tait")
+        print(f"{'faces':>7} {'particles':>9} {'alone ms':>9} {'model ms':>9} {'share':>7}")
+        for f in a.faces:
+            alone, count, _ = setup(Path(tmp), f)
+            model = setup(Path(tmp), f, '["reflective", "wall_integral"]')[0]
+            ta, tm = [], []
+            for _ in range(a.repeat):
+                ta.append(per_step(alone, a.steps))
+                tm.append(per_step(model, a.steps))
+            t0, t1 = statistics.median(ta), statistics.median(tm)
+            print(f"{count:>7} {alone.state.n:>9} {1e3 * t0:>9.2f} {1e3 * t1:>9.2f} {100 * (t1 - t0) / t1:>6.1f}%")
             sys.stdout.flush()
 
 
