@@ -1,0 +1,63 @@
+"""postprocessing/spheric_test2.py scores the experiment against itself as perfect, and its
+impulse is the integral it claims (the script is what docs/walls.md quotes)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sphcore_plugins.gauges.reference import kleefsman
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("pp_spheric_test2", ROOT / "postprocessing" / "spheric_test2.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _as_run(exp, t1=2.0):
+    keep = exp["t"] <= t1
+    run = {"time": exp["t"][keep]}
+    for name in ("H1", "H2", "H3", "H4", "P1", "P2", "P3", "P4"):
+        run[name] = exp[name][keep]
+    return run
+
+
+def test_the_experiment_scored_against_itself_is_perfect():
+    mod, exp = _script(), kleefsman()
+    res = mod.compare(_as_run(exp), exp, None)
+    for h in ("H1", "H2", "H3", "H4"):
+        assert res[f"{h}_rms_m"] == pytest.approx(0.0, abs=1e-12)
+    for p in ("P1", "P2", "P3", "P4"):
+        r = res[p]
+        assert r["arrival_error_s"] == 0.0 and r["peak_error"] == 0.0
+        assert r["impulse_ratio"] == pytest.approx(1.0, rel=1e-12)
+    # P1 reaches 2 kPa at 0.394 s (the experiment file), its impulse over 0.2 s is about 1.4 kPa s
+    assert 0.39 < res["P1"]["arrival_exp_s"] < 0.40
+    assert 1000.0 < res["P1"]["impulse_exp_Pa_s"] < 2000.0
+
+
+def test_impulse_of_a_step_and_of_a_spike():
+    mod = _script()
+    t = np.linspace(0.0, 1.0, 1001)
+    p = np.where(t >= 0.3, 5000.0, 0.0)
+    ta = mod.arrival(t, p)
+    assert ta == pytest.approx(0.3)
+    assert mod.first_impulse(t, p, ta) == pytest.approx(5000.0 * mod.WINDOW_S, rel=1e-9)
+    # one sample of 100 kPa adds its 1 ms share (100 Pa s) to the impulse and sets the peak
+    spike = p.copy()
+    spike[350] = 1e5
+    assert mod.first_impulse(t, spike, ta) - mod.first_impulse(t, p, ta) == pytest.approx(95.0, rel=1e-9)
+    assert mod.first_peak(t, spike, ta) == 1e5
+
+
+def test_a_missing_run_prints_one_line_and_exits_2(tmp_path, capsys):
+    assert _script().main([str(tmp_path / "nothing")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "nothing" in err
