@@ -317,3 +317,19 @@ def test_output_directory_is_never_clobbered(good_case, capsys, tmp_path):
     assert status == 2
     _assert_one_line_error(err, foreign, "refusing")
     assert (foreign / "precious.txt").read_text() == "keep me"
+
+
+def test_a_dx_that_rounds_a_block_into_a_wall_says_which_max_fits(tmp_path, capsys):
+    """A block against the right wall, 0.6 m long: dx = 0.016 gives 37.5 rows, rounded up to
+    38, the last past the wall. The one-line error names the block and the max that fits,
+    and with that max the case loads."""
+    text = _edit("min = [0.2, 0.2]\nmax = [0.4, 0.4]", "min = [0.4, 0.0]\nmax = [1.0, 0.4]")
+    case_dir = write_case(tmp_path / "case", text)
+    status, _, err = _cli(capsys, "check", case_dir, "--set", "particles.dx=0.016")
+    assert status == 2
+    _assert_one_line_error(err, "blocks[0]", "37.5 dx", "give max[0] = 0.992")
+    assert not (case_dir / "output").exists()
+    fixed = write_case(tmp_path / "fixed", text.replace("max = [1.0, 0.4]", "max = [0.992, 0.4]"))
+    sim = make_sim(fixed, ["particles.dx=0.016"])
+    x = sim.state.pos[:, 0]
+    assert x.max() == pytest.approx(0.992 - 0.008) and x.min() == pytest.approx(0.408)
