@@ -21,7 +21,7 @@ import numba
 import numpy as np
 from numba import njit
 
-from .facegeom import face_distance
+from .facegeom import face_distance, nearest_point
 
 @dataclass(frozen=True)
 class Faces:
@@ -29,6 +29,13 @@ class Faces:
 
     ``groups``: (start, stop, sign) per closed wall, faces start:stop; sign +1 for an
     obstacle (fluid outside), -1 for a tank (fluid inside). Faces in no group are open.
+
+    Geometry queries (numpy in, numpy out; brute force over the faces, for set-up and
+    post-processing; the kernels use a :class:`FaceGrid`): :meth:`distances`,
+    :meth:`nearest`, :meth:`signed_distance`, :meth:`normal_at`, :meth:`in_fluid`. The wall
+    share of a kernel support with its gradient and moment for the same faces is the wall
+    model's (``sphcore_plugins.wall_integral.meshfaces.face_terms_at``: it needs the
+    kernel's radial tables).
     """
 
     verts: np.ndarray
@@ -65,6 +72,34 @@ class Faces:
         """(n,) distance (m) of each point to the nearest face (inf without faces)."""
         pos = np.ascontiguousarray(pos, dtype=np.float64)
         return _min_distance(self.verts, pos)
+
+    def nearest(self, pos: np.ndarray):
+        """For each point: (the nearest point on any face (n, dim) m, that face's index (n,),
+        the distance (n,) m). Brute force over the faces (set-up and post-processing)."""
+        pos = np.ascontiguousarray(pos, dtype=np.float64)
+        if self.count == 0:
+            raise ValueError("no faces")
+        return _nearest(self.verts, pos)
+
+    def signed_distance(self, pos: np.ndarray) -> np.ndarray:
+        """(n,) distance (m) to the nearest face, positive on the fluid side of every closed
+        wall, negative inside a solid (an open wall has no inside: positive on both sides)."""
+        dist = self.nearest(pos)[2]
+        return np.where(self.in_fluid(pos), dist, -dist)
+
+    def normal_at(self, pos: np.ndarray) -> np.ndarray:
+        """(n, dim) unit normal of the walls at each point, towards the fluid: from the nearest
+        point of the faces to the point (the face normal over a face's interior, radial about
+        an edge or vertex), reversed inside a solid; the nearest face's normal for a point
+        on a face (closer than 1e-12 of its coordinates' size: round-off). For an open wall,
+        away from the wall on the point's side."""
+        pos = np.ascontiguousarray(pos, dtype=np.float64)
+        q, f, dist = self.nearest(pos)
+        out = self.normals()[f]
+        away = dist > 1e-12 * (1.0 + np.abs(pos).max(axis=1))
+        sign = np.where(self.in_fluid(pos), 1.0, -1.0)
+        out[away] = (pos[away] - q[away]) / dist[away, None] * sign[away, None]
+        return out
 
     def in_fluid(self, pos: np.ndarray) -> np.ndarray:
         """(n,) bool: on the fluid side of every closed wall (generalised winding number:
@@ -136,6 +171,27 @@ def _min_distance(verts, pos):
         for f in range(verts.shape[0]):
             out[i] = min(out[i], face_distance(verts, f, pos[i, 0], pos[i, 1], z))
     return out
+
+
+@njit(cache=True, parallel=True)
+def _nearest(verts, pos):
+    n, dim = pos.shape
+    pts = np.zeros((n, dim))
+    face = np.zeros(n, np.int64)
+    dist = np.full(n, np.inf)
+    for i in numba.prange(n):
+        x2 = pos[i, 2] if dim == 3 else 0.0
+        for f in range(verts.shape[0]):
+            q0, q1, q2 = nearest_point(verts, f, pos[i, 0], pos[i, 1], x2)
+            d = math.sqrt((pos[i, 0] - q0) ** 2 + (pos[i, 1] - q1) ** 2 + (x2 - q2) ** 2)
+            if d < dist[i]:
+                dist[i] = d
+                face[i] = f
+                pts[i, 0] = q0
+                pts[i, 1] = q1
+                if dim == 3:
+                    pts[i, 2] = q2
+    return pts, face, dist
 
 
 @njit(cache=True, parallel=True)
