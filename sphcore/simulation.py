@@ -42,7 +42,7 @@ def block_positions(case, k, b):
     if bad.size:
         i, p = bad[0]
         raise CaseError(case.file, f"blocks[{k}]", f"particle at {pos[i].round(9).tolist()} is outside wall plane {p} "
-                        f"(distance {d[i, p]:.6g} m < radius {r:.6g} m){_rounding_hint(b, dx, pos[i])}")
+                        f"(distance {d[i, p]:.6g} m < radius {r:.6g} m){_rounding_hint(k, b, dx, pos[i])}")
     if case.faces.count == 0:
         return pos, 0
     keep = (case.faces.distances(pos) >= r * (1.0 - INSIDE_TOL)) & case.faces.in_fluid(pos)
@@ -52,7 +52,7 @@ def block_positions(case, k, b):
     return np.ascontiguousarray(pos[keep]), int(pos.shape[0] - keep.sum())
 
 
-def _rounding_hint(b, dx, x) -> str:
+def _rounding_hint(k, b, dx, x) -> str:
     """When the block's extent is not a whole number of dx and rounding up put the row of
     the particle x past the block's max (and so into a wall): what to change (a dx changed
     with --set meets this first)."""
@@ -64,9 +64,12 @@ def _rounding_hint(b, dx, x) -> str:
     if up.size == 0:
         return ""
     a = int(up[0])
-    fit = lo[a] + np.floor(cells[a] + 1e-9) * dx
+    fit = hi.copy()
+    fit[a] = lo[a] + np.floor(cells[a] + 1e-9) * dx
+    vec = ", ".join(f"{v:.9g}" for v in fit)
     return (f"; the block's extent along axis {a}, {hi[a] - lo[a]:.6g} m, is {cells[a]:.4g} dx, rounded up to "
-            f"{int(np.rint(cells[a]))} rows: give max[{a}] = {fit:.9g} (or a dx that divides the extent)")
+            f"{int(np.rint(cells[a]))} rows: give max[{a}] = {fit[a]:.9g} (--set 'blocks[{k}].max=[{vec}]') "
+            f"or a dx that divides the extent")
 
 
 def build_state(case) -> ParticleState:

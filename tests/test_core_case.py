@@ -327,9 +327,8 @@ def test_a_dx_that_rounds_a_block_into_a_wall_says_which_max_fits(tmp_path, caps
     case_dir = write_case(tmp_path / "case", text)
     status, _, err = _cli(capsys, "check", case_dir, "--set", "particles.dx=0.016")
     assert status == 2
-    _assert_one_line_error(err, "blocks[0]", "37.5 dx", "give max[0] = 0.992")
+    _assert_one_line_error(err, "blocks[0]", "37.5 dx", "give max[0] = 0.992", "--set 'blocks[0].max=[0.992, 0.4]'")
     assert not (case_dir / "output").exists()
-    fixed = write_case(tmp_path / "fixed", text.replace("max = [1.0, 0.4]", "max = [0.992, 0.4]"))
-    sim = make_sim(fixed, ["particles.dx=0.016"])
+    sim = make_sim(case_dir, ["particles.dx=0.016", "blocks[0].max=[0.992, 0.4]"])
     x = sim.state.pos[:, 0]
     assert x.max() == pytest.approx(0.992 - 0.008) and x.min() == pytest.approx(0.408)
