@@ -30,8 +30,8 @@ from sphcore_plugins.reflective.collision import reflect_particles
 
 
 def _load_benchmark(name):
-    """The module benchmarks/<name>.py (its random domains), without putting the
-    benchmarks folder on sys.path."""
+    """The module benchmarks/<name>.py, registered under its name (so that fuzz_faces finds
+    fuzz_domains already loaded)."""
     path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
@@ -40,12 +40,13 @@ def _load_benchmark(name):
     return module
 
 
-ff = _load_benchmark("fuzz_faces")
+fd = _load_benchmark("fuzz_domains")  # the random domains (first: fuzz_faces imports it)
+ff = _load_benchmark("fuzz_faces")  # the escape / crossing check
 
 M = 60  # trajectories per example
 # derandomized: the same examples on every run (see the module docstring)
 SETTINGS = settings(max_examples=100, deadline=None, derandomize=True, database=None)
-KINDS = st.sampled_from(ff.KINDS)
+KINDS = st.sampled_from(fd.KINDS)
 
 
 def kernel(pos0, pos1, vel, acc, radius, planes, faces, cr, **kw):
@@ -68,7 +69,7 @@ def run(scene):
 @st.composite
 def scenes(draw, cr=None, accelerate=None, max_step=100.0):
     """(kind, seed, cr, accelerate, contact, max_step): a random domain of a random kind
-    with M trajectories (``fuzz_faces.make_scene``, see :func:`build`), started strictly
+    with M trajectories (``fuzz_domains.make_scene``, see :func:`build`), started strictly
     inside the admissible region. Drawn as numbers so that a failing example prints
     short and can be rebuilt."""
     kind = draw(KINDS)
@@ -81,7 +82,7 @@ def scenes(draw, cr=None, accelerate=None, max_step=100.0):
 
 
 def build(kind, seed, cr, accelerate, contact, max_step):
-    return ff.make_scene(kind, np.random.default_rng(seed), M, cr=cr, accelerate=accelerate,
+    return fd.make_scene(kind, np.random.default_rng(seed), M, cr=cr, accelerate=accelerate,
                          contact=contact, max_step=max_step, on_wall=0.0)
 
 
@@ -98,7 +99,7 @@ def assert_no_escape(scene, pos, vel):
 @given(scenes())
 def test_no_escape_no_crossing_finite(params):
     scene = build(*params)
-    assert ff.admissible(scene.dom, scene.pos0, scene.radius).all()  # the precondition
+    assert fd.admissible(scene.dom, scene.pos0, scene.radius).all()  # the precondition
     pos, v, g, flags, counts = run(scene)
     assert_no_escape(scene, pos, v)
     assert g == int(flags.sum()) and set(np.unique(flags)) <= {0, 1}
@@ -109,7 +110,7 @@ def test_no_escape_no_crossing_finite(params):
     # a step shorter than 1e-3 r that ends 2e-3 r clear of every wall never comes within
     # r of one: untouched
     short = np.linalg.norm(scene.pos1 - scene.pos0, axis=1) < 1e-3 * scene.radius
-    short &= ff.admissible(scene.dom, scene.pos1, scene.radius * (1 + 2e-3))
+    short &= fd.admissible(scene.dom, scene.pos1, scene.radius * (1 + 2e-3))
     assert not counts[short].any()
 
 
@@ -144,9 +145,9 @@ def test_closed_face_box_tank_equals_the_box_of_planes(dim, seed, cr):
     r = float(rng.uniform(0.01, 0.1))
     n = 200
     pos0 = rng.uniform(lo + r, hi - r, (n, dim))
-    step = ff.random_directions(rng, n, dim) * rng.uniform(0.0, (hi - lo).min(), (n, 1))
+    step = fd.random_directions(rng, n, dim) * rng.uniform(0.0, (hi - lo).min(), (n, 1))
     vel = step / 1e-3
-    acc = ff.random_directions(rng, n, dim) * 10.0 if rng.uniform() < 0.5 else None
+    acc = fd.random_directions(rng, n, dim) * 10.0 if rng.uniform() < 0.5 else None
     with_planes = kernel(pos0, pos0 + step, vel, acc, r, Planes.box(lo, hi), None, cr)
     with_faces = kernel(pos0, pos0 + step, vel, acc, r, None, closed_wall(box(lo, hi), True), cr)
     assert np.array_equal(with_planes[4], with_faces[4])  # the same reflections
@@ -242,7 +243,7 @@ def plate_tank(dim, r, turned):
         rot[:2, :2] = turn2(math.radians(30.0))
     half = np.full(dim, 1.0)
     half[0] = r
-    faces = closed_wall(ff.turned_box(-half, half, rot, np.zeros(dim)) + c, fluid_inside=False)
+    faces = closed_wall(fd.turned_box(-half, half, rot, np.zeros(dim)) + c, fluid_inside=False)
     return Planes.box(np.zeros(dim), np.ones(dim)), faces, c, rot[:, 0]
 
 
@@ -253,16 +254,16 @@ def test_thin_plate_hit_at_100_domain_lengths_per_step(dim, turned, cr):
     r = 0.02
     planes, faces, c, normal = plate_tank(dim, r, turned)
     rng = np.random.default_rng(dim * 10 + int(turned) + int(4 * cr))
-    dom = ff.Domain(dim, planes, faces, np.zeros(dim), np.ones(dim), 1.0, c, normal)
+    dom = fd.Domain(dim, planes, faces, np.zeros(dim), np.ones(dim), 1.0, c, normal)
     n = 200 if dim == 2 else 60
-    pos0 = ff.sample_starts(rng, dom, np.full(n, r), on_wall=0.0)
+    pos0 = fd.sample_starts(rng, dom, np.full(n, r), on_wall=0.0)
     # towards the plate, 100 domain lengths in one step (a few 1 to 100)
-    u = ff.random_directions(rng, n, dim)
+    u = fd.random_directions(rng, n, dim)
     side = np.sign((pos0 - c) @ normal)
     u *= np.where((u @ normal) * side > 0, -1.0, 1.0)[:, None]
     length = np.where(np.arange(n) < n // 4, rng.uniform(1.0, 100.0, n), 100.0)[:, None]
     step = u * length
-    scene = ff.Scene(dom, np.full(n, r), pos0, pos0 + step, step / 1e-3, np.zeros((n, dim)), cr, True)
+    scene = fd.Scene(dom, np.full(n, r), pos0, pos0 + step, step / 1e-3, np.zeros((n, dim)), cr, True)
     pos, vel, g, flags, counts = run(scene)
     assert_no_escape(scene, pos, vel)
     assert (counts > 0).all()
@@ -277,10 +278,10 @@ def touching(verts, f, bary, r):
 
 WALLS = {
     "segment": Faces(polyline([[0.1, 0.2], [1.3, 0.9]])),
-    "obstacle-2d": closed_wall(polygon(ff.star_polygon(np.random.default_rng(3), np.zeros(2), 1.0)), False),
+    "obstacle-2d": closed_wall(polygon(fd.star_polygon(np.random.default_rng(3), np.zeros(2), 1.0)), False),
     "triangle": Faces(np.array([[[0.0, 0.1, 0.0], [1.0, 0.2, 0.4], [0.1, 1.0, 0.3]]])),
-    "mesh-tank": closed_wall(ff.heightmap_mesh(np.random.default_rng(4), np.zeros(3), 1.0)
-                             @ ff.random_rotation(np.random.default_rng(5), 3).T, True),
+    "mesh-tank": closed_wall(fd.heightmap_mesh(np.random.default_rng(4), np.zeros(3), 1.0)
+                             @ fd.random_rotation(np.random.default_rng(5), 3).T, True),
 }
 
 
@@ -295,7 +296,7 @@ def test_at_rest_touching_a_face_is_bit_for_bit_unchanged(name):
         w = rng.dirichlet(np.ones(dim), 5)
         pts += [touching(faces.verts, f, wf, r) for wf in w]
     pos0 = np.array(pts)
-    pos0 = pos0[ff.admissible(ff.Domain(dim, None, faces, None, None, 1.0), pos0, np.full(len(pos0), r))]
+    pos0 = pos0[fd.admissible(fd.Domain(dim, None, faces, None, None, 1.0), pos0, np.full(len(pos0), r))]
     assert len(pos0) >= 5
     vel = rng.standard_normal(pos0.shape)  # also pushing into the wall
     acc = rng.standard_normal(pos0.shape) * 100.0
@@ -316,7 +317,7 @@ def test_moving_parallel_to_a_face_at_distance_r_is_unchanged(dim, slanted):
     else:
         verts = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
         if slanted:
-            verts = np.ascontiguousarray(verts @ ff.random_rotation(np.random.default_rng(1), 3).T + 0.3)
+            verts = np.ascontiguousarray(verts @ fd.random_rotation(np.random.default_rng(1), 3).T + 0.3)
     faces = Faces(verts)
     w = np.linspace(0.05, 0.9, 12)
     if dim == 2:
@@ -379,13 +380,13 @@ def test_touching_starts_in_random_domains():
     # escaped or crossed before the fix)
     rng = np.random.default_rng(11)
     failures = 0
-    for kind in ff.KINDS:
+    for kind in fd.KINDS:
         for _ in range(2):
-            scene = ff.make_scene(kind, rng, 400, on_wall=1.0, max_step=1.0)
+            scene = fd.make_scene(kind, rng, 400, on_wall=1.0, max_step=1.0)
             pos, v, g, flags, counts = run(scene)
             esc, cro, bad = ff.check(scene, pos, v)
             failures += int((esc | cro | bad).sum())
-    assert failures == 0, f"{failures} of {len(ff.KINDS) * 800} touching starts escaped or crossed"
+    assert failures == 0, f"{failures} of {len(fd.KINDS) * 800} touching starts escaped or crossed"
 
 
 def test_sliding_into_a_concave_corner_with_cr_0():
