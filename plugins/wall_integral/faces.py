@@ -210,6 +210,20 @@ def _constraint3(j, k, x0, x1, x2, normals, offsets, h, e1, e2, d):
     return ax / na, ay / na, -c / na, 0
 
 
+@njit(cache=True, inline="always")
+def plane_basis(n0, n1, n2):
+    """Orthonormal (e1, e2) in the plane of unit normal n, with e1 x e2 = n (so that a
+    polygon whose normal is n runs counter-clockwise in (e1, e2))."""
+    if abs(n0) < 0.9:
+        c0, c1, c2 = 0.0, n2, -n1
+    else:
+        c0, c1, c2 = -n2, 0.0, n0
+    cn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+    e1 = (c0 / cn, c1 / cn, c2 / cn)
+    e2 = (n1 * e1[2] - n2 * e1[1], n2 * e1[0] - n0 * e1[2], n0 * e1[1] - n1 * e1[0])
+    return e1, e2
+
+
 @njit(cache=True)
 def _face3(kid, x0, x1, x2, normals, offsets, h, k, d):
     """(d int f_s dA, int W dA, in-plane int W y dA (3 components)) of face k, h = 1 units.
@@ -221,14 +235,7 @@ def _face3(kid, x0, x1, x2, normals, offsets, h, k, d):
     integrand is the constant Phi(2h) = Psi(2) - Psi(d).
     """
     nk = normals.shape[0]
-    n0, n1, n2 = normals[k, 0], normals[k, 1], normals[k, 2]
-    if abs(n0) < 0.9:  # orthonormal (e1, e2) with e1 x e2 = n_k
-        c0, c1, c2 = 0.0, n2, -n1
-    else:
-        c0, c1, c2 = -n2, 0.0, n0
-    cn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
-    e1 = (c0 / cn, c1 / cn, c2 / cn)
-    e2 = (n1 * e1[2] - n2 * e1[1], n2 * e1[0] - n0 * e1[2], n0 * e1[1] - n1 * e1[0])
+    e1, e2 = plane_basis(normals[k, 0], normals[k, 1], normals[k, 2])
     inside = 1.0
     for j in range(nk):
         kind = _constraint3(j, k, x0, x1, x2, normals, offsets, h, e1, e2, d)

@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .faces import _EPS, _edge3, _segment2, sector
+from .faces import _EPS, _edge3, _segment2, plane_basis, sector
 from .share import add_face
 
 
@@ -63,13 +63,7 @@ def triangle_terms(kid, x0, x1, x2, verts, f, h):
         return 0.0, 0.0, 0.0, 0.0, 0.0, n0, n1, n2, d
     # orthonormal (e1, e2) with e1 x e2 = n: the vertices, seen from the foot point, run
     # counter-clockwise (the right-hand orientation of the face)
-    if abs(n0) < 0.9:
-        c0, c1, c2 = 0.0, n2, -n1
-    else:
-        c0, c1, c2 = -n2, 0.0, n0
-    cn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
-    e10, e11, e12 = c0 / cn, c1 / cn, c2 / cn
-    e20, e21, e22 = n1 * e12 - n2 * e11, n2 * e10 - n0 * e12, n0 * e11 - n1 * e10
+    (e10, e11, e12), (e20, e21, e22) = plane_basis(n0, n1, n2)
     # in-plane coordinates of the vertices from the foot point (units of h)
     w0, w1, w2 = verts[f, 0, 0] - x0, verts[f, 0, 1] - x1, verts[f, 0, 2] - x2
     qa0 = (w0 * e10 + w1 * e11 + w2 * e12) / h
