@@ -41,7 +41,7 @@ from numba import njit, prange
 
 from .corrections import _corrected
 from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
-from .neighbours import separation
+from .neighbours import candidates_bound, forward_pairs, separation
 from .parallel import PARALLEL_MIN
 from .wall_completion import _complete_at_wall
 
@@ -86,7 +86,7 @@ class WallTerms(NamedTuple):
 
 
 @njit(cache=True, parallel=True)
-def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
+def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     """Accelerations acc (n_dest, dim) in m/s^2 and density rates drho (n_dest,) in kg/m^3/s.
 
     Every interacting pair is evaluated once and applied to both particles (Newton's third
@@ -95,7 +95,8 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
     parallel without touching the same particle, so the result does not depend on the
     number of threads. A pair of two plugin sources (ghosts) is skipped, a pair of a fluid
     particle and a source acts on the fluid particle only. ``work`` (n_sources, 6) is
-    scratch (the near-wall sums of the wall completion, p/rho^2 and 1/rho); ``nth``:
+    scratch (the near-wall sums of the wall completion, p/rho^2 and 1/rho), ``spos``
+    (n_sources, dim) scratch for the positions in cell order; ``nth``:
     numba's thread count (only the balance between threads depends on it).
 
     Terms whose coefficient is zero are skipped, so a case without viscosity or density
@@ -110,12 +111,14 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
     # element-wise passes: a parallel launch costs more than the work below PARALLEL_MIN
     if n_src >= PARALLEL_MIN:
         for i in prange(n_src):
-            _prepare(i, n_dest, dim, src, acc, drho, work)
+            _prepare(i, n_dest, dim, src, grid.order, acc, drho, work, spos)
     else:
         for i in range(n_src):
-            _prepare(i, n_dest, dim, src, acc, drho, work)
+            _prepare(i, n_dest, dim, src, grid.order, acc, drho, work, spos)
     slab_start = grid.slab_start
     nslab = slab_start.shape[0] - 1
+    nbuf = candidates_bound(grid)
+    buf = np.empty(nbuf if n_src < PAIRS_PARALLEL_MIN else 0, np.int64)
     # prange gives each thread one contiguous block of tasks; the slabs differ in size
     # (water on a floor: the bottom layers hold most particles), so thread k's block holds
     # the slabs k, k + nth, k + 2 nth, ... Which thread runs a slab does not change the result.
@@ -129,7 +132,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
             for u in range(ntask):
                 s = 2 * u + phase
                 for c in range(slab_start[s], slab_start[s + 1]):
-                    _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work)
+                    _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf)
             continue
         block = (ntask + nth - 1) // nth
         for t in prange(nth * block):
@@ -137,8 +140,9 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
             if u >= ntask:
                 continue
             s = 2 * u + phase
+            tbuf = np.empty(nbuf, np.int64)  # one per task: a few dozen per call
             for c in range(slab_start[s], slab_start[s + 1]):
-                _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work)
+                _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, tbuf)
     if n_dest >= PARALLEL_MIN:
         for i in prange(n_dest):
             _finish(i, dim, src, prm, wall, acc, drho, work)
@@ -148,9 +152,11 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, nth):
 
 
 @njit(cache=True, inline="always")
-def _prepare(i, n_dest, dim, src, acc, drho, work):
+def _prepare(i, n_dest, dim, src, order, acc, drho, work, spos):
     """Zero particle i's rates and sums; its p/rho^2 and 1/rho, per particle rather than
-    per pair (divisions are slow)."""
+    per pair (divisions are slow); row i of the positions in cell order."""
+    for d in range(dim):
+        spos[i, d] = src.pos[order[i], d]
     rho_i = src.rho[i]
     if i < n_dest:
         for d in range(dim):
@@ -163,8 +169,9 @@ def _prepare(i, n_dest, dim, src, acc, drho, work):
 
 
 @njit(cache=True)
-def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work):
-    """The pairs of occupied cell c with itself and its forward neighbours, both ways."""
+def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf):
+    """The pairs of occupied cell c with itself and its forward neighbours, both ways;
+    ``buf``: scratch for one particle's partners (:func:`sphcore.neighbours.forward_pairs`)."""
     pos, vel, rho, p, m = src
     dim = pos.shape[1]
     h, c0 = prm.h, prm.c0
@@ -187,9 +194,7 @@ def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work):
     # gravity in scalars: loads from an array inside the loop are repeated after every
     # store to acc/drho/work, which the compiler cannot prove do not alias it
     gv0, gv1, gv2 = gravity[0], gravity[1], gravity[2]
-    order, cell_start, nbr = grid.order, grid.cell_start, grid.nbr
-    nq = nbr.shape[1]
-    centre = nq // 2
+    order, cell_start = grid.order, grid.cell_start
     for k in range(cell_start[c], cell_start[c + 1]):
         i = order[k]
         di = i < n_dest
@@ -206,91 +211,82 @@ def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work):
         pi_r = work[i, 4]
         irho_i = work[i, 5]
         near_i = walls and di and wall.share[i] > 0.0
-        for q in range(centre, nq):
-            c2 = nbr[c, q]
-            if c2 < 0:
-                continue
-            k0 = k + 1 if q == centre else cell_start[c2]
-            for k2 in range(k0, cell_start[c2 + 1]):
-                j = order[k2]
-                dj = j < n_dest
-                if not (di or dj):
-                    continue  # two sources (ghosts) do not interact
-                x0, x1, x2, r2 = separation(pos, i, j, dim)
-                if r2 >= r2max:
-                    continue
-                r = np.sqrt(r2)
-                f = fscale * kernel_f_of_q(kid, r * inv_h)
-                g0 = f * x0  # grad_i W_ij = -grad_j W_ji
-                g1 = f * x1
-                g2 = f * x2
-                if use_L:
-                    g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
-                v0 = vel[i, 0] - vel[j, 0]
-                v1 = vel[i, 1] - vel[j, 1]
-                v2 = vel[i, 2] - vel[j, 2] if dim == 3 else 0.0
-                m_j = m[j]
-                vg = v0 * g0 + v1 * g1 + v2 * g2  # v_ij . grad_i W_ij = v_ji . grad_j W_ji
-                dr_i = m_j * vg
-                dr_j = m_i * vg
-                s = pi_r + work[j, 4]
-                e0 = 0.0
-                e1 = 0.0
-                e2 = 0.0
-                if any_visc:
-                    xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
-                    ir2 = 1.0 / (r2 + eta2)
-                    rho_j = rho[j]
-                    if do_diff:
-                        psi = rho_i - rho_j  # psi_ji = -psi_ij
-                        if diff_h != 0.0:
-                            psi -= diff_h * (gv0 * x0 + gv1 * x1 + gv2 * x2)
-                        cd = dcoef * psi * xg * ir2
-                        dr_i += cd * m_j * work[j, 5]
-                        dr_j -= cd * m_i * irho_i
-                    if do_av:
-                        # approaching pairs only (v_ij . x_ij < 0); min() rather than a branch,
-                        # which the CPU would mispredict for half the pairs of a flow
-                        mu = h * min(v0 * x0 + v1 * x1 + v2 * x2, 0.0) * ir2
-                        s += (-alpha * c0 * mu + beta * mu * mu) * 2.0 / (rho_i + rho_j)
-                    if do_lam:
-                        lam = 4.0 * nu / (rho_i + rho_j) * xg * ir2
-                        e0 = -lam * v0
-                        e1 = -lam * v1
-                        e2 = -lam * v2
-                # pressure, artificial and laminar viscosity: -m_j e on i, +m_i e on j
-                e0 += s * g0
-                e1 += s * g1
-                e2 += s * g2
-                near_j = walls and dj and wall.share[j] > 0.0
-                w = 0.0
-                gx = 0.0
-                if near_i or near_j:
-                    w = kernel_w(kid, r, h, dim)
-                    gx = -(x0 * gv0 + x1 * gv1 + x2 * gv2)
-                if di:
-                    a0 -= m_j * e0
-                    a1 -= m_j * e1
-                    a2 -= m_j * e2
-                    dr += dr_i
-                    if near_i:
-                        vj = m_j * work[j, 5]
-                        gam += vj * w
-                        b0 += vj * gx * g0
-                        b1 += vj * gx * g1
-                        b2 += vj * gx * g2
-                if dj:
-                    acc[j, 0] += m_i * e0
-                    acc[j, 1] += m_i * e1
-                    if dim == 3:
-                        acc[j, 2] += m_i * e2
-                    drho[j] += dr_j
-                    if near_j:
-                        vi = m_i * irho_i
-                        work[j, 0] += vi * w
-                        work[j, 1] += vi * gx * g0
-                        work[j, 2] += vi * gx * g1
-                        work[j, 3] += vi * gx * g2
+        for u in range(forward_pairs(k, c, n_dest, spos, grid, r2max, buf)):
+            j = buf[u]
+            dj = j < n_dest
+            x0, x1, x2, r2 = separation(pos, i, j, dim)
+            r = np.sqrt(r2)
+            f = fscale * kernel_f_of_q(kid, r * inv_h)
+            g0 = f * x0  # grad_i W_ij = -grad_j W_ji
+            g1 = f * x1
+            g2 = f * x2
+            if use_L:
+                g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
+            v0 = vel[i, 0] - vel[j, 0]
+            v1 = vel[i, 1] - vel[j, 1]
+            v2 = vel[i, 2] - vel[j, 2] if dim == 3 else 0.0
+            m_j = m[j]
+            vg = v0 * g0 + v1 * g1 + v2 * g2  # v_ij . grad_i W_ij = v_ji . grad_j W_ji
+            dr_i = m_j * vg
+            dr_j = m_i * vg
+            s = pi_r + work[j, 4]
+            e0 = 0.0
+            e1 = 0.0
+            e2 = 0.0
+            if any_visc:
+                xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
+                ir2 = 1.0 / (r2 + eta2)
+                rho_j = rho[j]
+                if do_diff:
+                    psi = rho_i - rho_j  # psi_ji = -psi_ij
+                    if diff_h != 0.0:
+                        psi -= diff_h * (gv0 * x0 + gv1 * x1 + gv2 * x2)
+                    cd = dcoef * psi * xg * ir2
+                    dr_i += cd * m_j * work[j, 5]
+                    dr_j -= cd * m_i * irho_i
+                if do_av:
+                    # approaching pairs only (v_ij . x_ij < 0); min() rather than a branch,
+                    # which the CPU would mispredict for half the pairs of a flow
+                    mu = h * min(v0 * x0 + v1 * x1 + v2 * x2, 0.0) * ir2
+                    s += (-alpha * c0 * mu + beta * mu * mu) * 2.0 / (rho_i + rho_j)
+                if do_lam:
+                    lam = 4.0 * nu / (rho_i + rho_j) * xg * ir2
+                    e0 = -lam * v0
+                    e1 = -lam * v1
+                    e2 = -lam * v2
+            # pressure, artificial and laminar viscosity: -m_j e on i, +m_i e on j
+            e0 += s * g0
+            e1 += s * g1
+            e2 += s * g2
+            near_j = walls and dj and wall.share[j] > 0.0
+            w = 0.0
+            gx = 0.0
+            if near_i or near_j:
+                w = kernel_w(kid, r, h, dim)
+                gx = -(x0 * gv0 + x1 * gv1 + x2 * gv2)
+            if di:
+                a0 -= m_j * e0
+                a1 -= m_j * e1
+                a2 -= m_j * e2
+                dr += dr_i
+                if near_i:
+                    vj = m_j * work[j, 5]
+                    gam += vj * w
+                    b0 += vj * gx * g0
+                    b1 += vj * gx * g1
+                    b2 += vj * gx * g2
+            if dj:
+                acc[j, 0] += m_i * e0
+                acc[j, 1] += m_i * e1
+                if dim == 3:
+                    acc[j, 2] += m_i * e2
+                drho[j] += dr_j
+                if near_j:
+                    vi = m_i * irho_i
+                    work[j, 0] += vi * w
+                    work[j, 1] += vi * gx * g0
+                    work[j, 2] += vi * gx * g1
+                    work[j, 3] += vi * gx * g2
         if di:
             acc[i, 0] += a0
             acc[i, 1] += a1

@@ -71,6 +71,7 @@ class Forces:
         self._grid = None
         self._shepard = np.zeros(1)
         self._work = np.zeros((0, 6))
+        self._spos = np.zeros((0, ctx.params.dim))
         self._src_buf = None  # fluid + plugin sources, reused between evaluations
         self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0),
                                False)
@@ -144,6 +145,7 @@ class Forces:
             self._L = np.zeros((n, 3, 3))
         if self._work.shape[0] < n_src:
             self._work = np.zeros((n_src + n_src // 4, 6))
+            self._spos = np.zeros((self._work.shape[0], self.ctx.params.dim))
 
     # -- the evaluation ---------------------------------------------------------------
 
@@ -163,7 +165,8 @@ class Forces:
             if prm.kernel_gradient:
                 neighbour_sums(st.n, src, grid.view, prm, True, self._L, False, self._shepard)
                 counters["kernel_gradient_correction"] += 1
-            sph_rates(st.n, src, grid.view, prm, self._L, wall, acc, drho, self._work[:src.pos.shape[0]],
+            n_src = src.pos.shape[0]
+            sph_rates(st.n, src, grid.view, prm, self._L, wall, acc, drho, self._work[:n_src], self._spos[:n_src],
                       numba.get_num_threads())
             counters["continuity"] += 1
             counters["momentum"] += 1

@@ -91,6 +91,64 @@ def separation(pos, i, j, dim):
     return x0, x1, x2, x0 * x0 + x1 * x1 + x2 * x2
 
 
+@njit(cache=True, inline="always")
+def forward_pairs(k, c, n_dest, spos, grid, r2max, buf):
+    """The partners j of particle i = order[k] (in occupied cell c) in the pair loop:
+    the particles after it in its own cell and those of the forward neighbour cells that
+    are closer than sqrt(r2max), excluding pairs of two sources (i, j >= n_dest). Writes
+    them to ``buf[:count]`` in the order of the cell walk and returns the count.
+    ``spos``: the positions in cell order, ``spos[k] = pos[order[k]]``.
+
+    Why a list: the distance test fails for most candidates (2D: 2 of 3, 3D: 5 of 6 with
+    cells of side 2h), and as a branch in the pair loop it is mispredicted about as often;
+    here it is a branch-free compaction over positions contiguous in memory (the index is
+    always stored, the count advances only when the test passes), and the pair loop then
+    runs over partners only. Measured with one thread (median of 9 x 200 calls of
+    ``sph_rates``): the seed's dam break at t = 0.15 s (2,592 particles) 0.76 -> 0.65 ms,
+    the 3D dam break at t = 0.05 s (16,384 particles) 19.8 -> 16.7 ms.
+    """
+    order, cell_start, nbr = grid.order, grid.cell_start, grid.nbr
+    dim = spos.shape[1]
+    centre = nbr.shape[1] // 2
+    p0 = spos[k, 0]
+    p1 = spos[k, 1]
+    p2 = spos[k, 2] if dim == 3 else 0.0
+    count = 0
+    for q in range(centre, nbr.shape[1]):
+        c2 = nbr[c, q]
+        if c2 < 0:
+            continue
+        k0 = k + 1 if q == centre else cell_start[c2]
+        for k2 in range(k0, cell_start[c2 + 1]):
+            d0 = p0 - spos[k2, 0]
+            d1 = p1 - spos[k2, 1]
+            r2 = d0 * d0 + d1 * d1
+            if dim == 3:
+                d2 = p2 - spos[k2, 2]
+                r2 += d2 * d2
+            buf[count] = k2
+            count += 1 if r2 < r2max else 0
+    # to particle indices; a pair of two sources (ghosts) does not interact
+    fluid_i = order[k] < n_dest
+    kept = 0
+    for u in range(count):
+        j = order[buf[u]]
+        buf[kept] = j
+        kept += 1 if (fluid_i or j < n_dest) else 0
+    return kept
+
+
+@njit(cache=True)
+def candidates_bound(grid):
+    """An upper bound on the partners :func:`forward_pairs` can return for one particle:
+    the most particles of any occupied cell times the cells of the forward stencil."""
+    most = 0
+    cs = grid.cell_start
+    for c in range(cs.shape[0] - 1):
+        most = max(most, cs[c + 1] - cs[c])
+    return most * (grid.nbr.shape[1] // 2 + 1)
+
+
 def _grow(arr, n, tail=()):
     """``arr`` if it holds n rows, else a new array of n + n/4 rows (amortised growth)."""
     if arr.shape[0] >= n and arr.shape[1:] == tail:
