@@ -12,7 +12,6 @@ criterion of the validation.
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 import numpy as np
 

@@ -29,8 +29,6 @@ Run summary: ``ghosts_last`` (ghosts of the last force evaluation), ``ghosts_max
 
 from __future__ import annotations
 
-import numpy as np
-
 from sphcore.api import CaseError, Option, hookimpl
 
 from .mirror import MAX_PLANES, TAIT_BASE_MIN, MirrorImages, inverse_tait
