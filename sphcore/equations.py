@@ -131,8 +131,8 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
         if n_src < PAIRS_PARALLEL_MIN:
             for u in range(ntask):
                 s = 2 * u + phase
-                for c in range(slab_start[s], slab_start[s + 1]):
-                    _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf)
+                _slab_pairs(slab_start[s], slab_start[s + 1], n_dest, src, grid, prm, L, wall, acc, drho, work, spos,
+                            buf)
             continue
         block = (ntask + nth - 1) // nth
         for t in prange(nth * block):
@@ -141,8 +141,8 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
                 continue
             s = 2 * u + phase
             tbuf = np.empty(nbuf, np.int64)  # one per task: a few dozen per call
-            for c in range(slab_start[s], slab_start[s + 1]):
-                _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, tbuf)
+            _slab_pairs(slab_start[s], slab_start[s + 1], n_dest, src, grid, prm, L, wall, acc, drho, work, spos,
+                        tbuf)
     if n_dest >= PARALLEL_MIN:
         for i in prange(n_dest):
             _finish(i, dim, src, prm, wall, acc, drho, work)
@@ -169,9 +169,12 @@ def _prepare(i, n_dest, dim, src, order, acc, drho, work, spos):
 
 
 @njit(cache=True)
-def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf):
-    """The pairs of occupied cell c with itself and its forward neighbours, both ways;
-    ``buf``: scratch for one particle's partners (:func:`sphcore.neighbours.forward_pairs`)."""
+def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf):
+    """The pairs of the occupied cells c_first <= c < c_end with themselves and their
+    forward neighbours, both ways; ``buf``: scratch for one particle's partners
+    (:func:`sphcore.neighbours.forward_pairs`). One call per slab, not per cell: a call
+    passes every field of src, grid, prm and wall (0.67 -> 0.63 ms per evaluation of the
+    seed's dam break, one thread)."""
     pos, vel, rho, p, m = src
     dim = pos.shape[1]
     h, c0 = prm.h, prm.c0
@@ -195,109 +198,110 @@ def _cell_pairs(c, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf):
     # store to acc/drho/work, which the compiler cannot prove do not alias it
     gv0, gv1, gv2 = gravity[0], gravity[1], gravity[2]
     order, cell_start = grid.order, grid.cell_start
-    for k in range(cell_start[c], cell_start[c + 1]):
-        i = order[k]
-        di = i < n_dest
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
-        dr = 0.0
-        gam = 0.0  # sum_j V_j W_ij, the particle's own neighbour sum (wall completion)
-        b0 = 0.0  # b = sum_j V_j grad_i W_ij (x_j - x_i) . g, for the wall completion
-        b1 = 0.0
-        b2 = 0.0
-        rho_i = rho[i]
-        m_i = m[i]
-        pi_r = work[i, 4]
-        irho_i = work[i, 5]
-        near_i = walls and di and wall.share[i] > 0.0
-        for u in range(forward_pairs(k, c, n_dest, spos, grid, r2max, buf)):
-            j = buf[u]
-            dj = j < n_dest
-            x0, x1, x2, r2 = separation(pos, i, j, dim)
-            r = np.sqrt(r2)
-            f = fscale * kernel_f_of_q(kid, r * inv_h)
-            g0 = f * x0  # grad_i W_ij = -grad_j W_ji
-            g1 = f * x1
-            g2 = f * x2
-            if use_L:
-                g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
-            v0 = vel[i, 0] - vel[j, 0]
-            v1 = vel[i, 1] - vel[j, 1]
-            v2 = vel[i, 2] - vel[j, 2] if dim == 3 else 0.0
-            m_j = m[j]
-            vg = v0 * g0 + v1 * g1 + v2 * g2  # v_ij . grad_i W_ij = v_ji . grad_j W_ji
-            dr_i = m_j * vg
-            dr_j = m_i * vg
-            s = pi_r + work[j, 4]
-            e0 = 0.0
-            e1 = 0.0
-            e2 = 0.0
-            if any_visc:
-                xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
-                ir2 = 1.0 / (r2 + eta2)
-                rho_j = rho[j]
-                if do_diff:
-                    psi = rho_i - rho_j  # psi_ji = -psi_ij
-                    if diff_h != 0.0:
-                        psi -= diff_h * (gv0 * x0 + gv1 * x1 + gv2 * x2)
-                    cd = dcoef * psi * xg * ir2
-                    dr_i += cd * m_j * work[j, 5]
-                    dr_j -= cd * m_i * irho_i
-                if do_av:
-                    # approaching pairs only (v_ij . x_ij < 0); min() rather than a branch,
-                    # which the CPU would mispredict for half the pairs of a flow
-                    mu = h * min(v0 * x0 + v1 * x1 + v2 * x2, 0.0) * ir2
-                    s += (-alpha * c0 * mu + beta * mu * mu) * 2.0 / (rho_i + rho_j)
-                if do_lam:
-                    lam = 4.0 * nu / (rho_i + rho_j) * xg * ir2
-                    e0 = -lam * v0
-                    e1 = -lam * v1
-                    e2 = -lam * v2
-            # pressure, artificial and laminar viscosity: -m_j e on i, +m_i e on j
-            e0 += s * g0
-            e1 += s * g1
-            e2 += s * g2
-            near_j = walls and dj and wall.share[j] > 0.0
-            w = 0.0
-            gx = 0.0
-            if near_i or near_j:
-                w = kernel_w(kid, r, h, dim)
-                gx = -(x0 * gv0 + x1 * gv1 + x2 * gv2)
+    for c in range(c_first, c_end):
+        for k in range(cell_start[c], cell_start[c + 1]):
+            i = order[k]
+            di = i < n_dest
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            dr = 0.0
+            gam = 0.0  # sum_j V_j W_ij, the particle's own neighbour sum (wall completion)
+            b0 = 0.0  # b = sum_j V_j grad_i W_ij (x_j - x_i) . g, for the wall completion
+            b1 = 0.0
+            b2 = 0.0
+            rho_i = rho[i]
+            m_i = m[i]
+            pi_r = work[i, 4]
+            irho_i = work[i, 5]
+            near_i = walls and di and wall.share[i] > 0.0
+            for u in range(forward_pairs(k, c, n_dest, spos, grid, r2max, buf)):
+                j = buf[u]
+                dj = j < n_dest
+                x0, x1, x2, r2 = separation(pos, i, j, dim)
+                r = np.sqrt(r2)
+                f = fscale * kernel_f_of_q(kid, r * inv_h)
+                g0 = f * x0  # grad_i W_ij = -grad_j W_ji
+                g1 = f * x1
+                g2 = f * x2
+                if use_L:
+                    g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
+                v0 = vel[i, 0] - vel[j, 0]
+                v1 = vel[i, 1] - vel[j, 1]
+                v2 = vel[i, 2] - vel[j, 2] if dim == 3 else 0.0
+                m_j = m[j]
+                vg = v0 * g0 + v1 * g1 + v2 * g2  # v_ij . grad_i W_ij = v_ji . grad_j W_ji
+                dr_i = m_j * vg
+                dr_j = m_i * vg
+                s = pi_r + work[j, 4]
+                e0 = 0.0
+                e1 = 0.0
+                e2 = 0.0
+                if any_visc:
+                    xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
+                    ir2 = 1.0 / (r2 + eta2)
+                    rho_j = rho[j]
+                    if do_diff:
+                        psi = rho_i - rho_j  # psi_ji = -psi_ij
+                        if diff_h != 0.0:
+                            psi -= diff_h * (gv0 * x0 + gv1 * x1 + gv2 * x2)
+                        cd = dcoef * psi * xg * ir2
+                        dr_i += cd * m_j * work[j, 5]
+                        dr_j -= cd * m_i * irho_i
+                    if do_av:
+                        # approaching pairs only (v_ij . x_ij < 0); min() rather than a branch,
+                        # which the CPU would mispredict for half the pairs of a flow
+                        mu = h * min(v0 * x0 + v1 * x1 + v2 * x2, 0.0) * ir2
+                        s += (-alpha * c0 * mu + beta * mu * mu) * 2.0 / (rho_i + rho_j)
+                    if do_lam:
+                        lam = 4.0 * nu / (rho_i + rho_j) * xg * ir2
+                        e0 = -lam * v0
+                        e1 = -lam * v1
+                        e2 = -lam * v2
+                # pressure, artificial and laminar viscosity: -m_j e on i, +m_i e on j
+                e0 += s * g0
+                e1 += s * g1
+                e2 += s * g2
+                near_j = walls and dj and wall.share[j] > 0.0
+                w = 0.0
+                gx = 0.0
+                if near_i or near_j:
+                    w = kernel_w(kid, r, h, dim)
+                    gx = -(x0 * gv0 + x1 * gv1 + x2 * gv2)
+                if di:
+                    a0 -= m_j * e0
+                    a1 -= m_j * e1
+                    a2 -= m_j * e2
+                    dr += dr_i
+                    if near_i:
+                        vj = m_j * work[j, 5]
+                        gam += vj * w
+                        b0 += vj * gx * g0
+                        b1 += vj * gx * g1
+                        b2 += vj * gx * g2
+                if dj:
+                    acc[j, 0] += m_i * e0
+                    acc[j, 1] += m_i * e1
+                    if dim == 3:
+                        acc[j, 2] += m_i * e2
+                    drho[j] += dr_j
+                    if near_j:
+                        vi = m_i * irho_i
+                        work[j, 0] += vi * w
+                        work[j, 1] += vi * gx * g0
+                        work[j, 2] += vi * gx * g1
+                        work[j, 3] += vi * gx * g2
             if di:
-                a0 -= m_j * e0
-                a1 -= m_j * e1
-                a2 -= m_j * e2
-                dr += dr_i
-                if near_i:
-                    vj = m_j * work[j, 5]
-                    gam += vj * w
-                    b0 += vj * gx * g0
-                    b1 += vj * gx * g1
-                    b2 += vj * gx * g2
-            if dj:
-                acc[j, 0] += m_i * e0
-                acc[j, 1] += m_i * e1
+                acc[i, 0] += a0
+                acc[i, 1] += a1
                 if dim == 3:
-                    acc[j, 2] += m_i * e2
-                drho[j] += dr_j
-                if near_j:
-                    vi = m_i * irho_i
-                    work[j, 0] += vi * w
-                    work[j, 1] += vi * gx * g0
-                    work[j, 2] += vi * gx * g1
-                    work[j, 3] += vi * gx * g2
-        if di:
-            acc[i, 0] += a0
-            acc[i, 1] += a1
-            if dim == 3:
-                acc[i, 2] += a2
-            drho[i] += dr
-            if near_i:
-                work[i, 0] += gam
-                work[i, 1] += b0
-                work[i, 2] += b1
-                work[i, 3] += b2
+                    acc[i, 2] += a2
+                drho[i] += dr
+                if near_i:
+                    work[i, 0] += gam
+                    work[i, 1] += b0
+                    work[i, 2] += b1
+                    work[i, 3] += b2
 
 
 @njit(cache=True, inline="always")
