@@ -41,7 +41,7 @@ from numba import njit, prange
 
 from .corrections import _corrected
 from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
-from .neighbours import candidates_bound, forward_pairs, separation
+from .neighbours import candidates_bound, forward_pairs, forward_rows, separation
 from .parallel import PARALLEL_MIN
 from .wall_completion import _complete_at_wall
 
@@ -198,7 +198,9 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
     # store to acc/drho/work, which the compiler cannot prove do not alias it
     gv0, gv1, gv2 = gravity[0], gravity[1], gravity[2]
     order, cell_start = grid.order, grid.cell_start
+    rows = np.empty((grid.nbr.shape[1] // 2 + 1, 2), np.int64)  # forward stencil rows (at most)
     for c in range(c_first, c_end):
+        nrows = forward_rows(c, grid, dim, rows)
         for k in range(cell_start[c], cell_start[c + 1]):
             i = order[k]
             di = i < n_dest
@@ -215,7 +217,7 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
             pi_r = work[i, 4]
             irho_i = work[i, 5]
             near_i = walls and di and wall.share[i] > 0.0
-            for u in range(forward_pairs(k, c, n_dest, spos, grid, r2max, buf)):
+            for u in range(forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf)):
                 j = buf[u]
                 dj = j < n_dest
                 x0, x1, x2, r2 = separation(pos, i, j, dim)
