@@ -20,12 +20,15 @@ import datetime as _dt
 import json
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import netCDF4
 import numpy as np
 
 import sphcore
 from sphcore.api import FLUID, GHOST, hookimpl, OutputError, ScheduledWriter, SPHERE
+
+if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
+    import netCDF4
 
 
 TABLE = "netcdf"
@@ -98,6 +101,7 @@ def new_dataset(path: Path, title: str, comment: str, attrs: dict) -> netCDF4.Da
     """A new netCDF file at ``path`` with an unlimited ``time`` dimension and the CF global
     attributes (Conventions, title, source, history, comment, then ``attrs``); the
     particle and probe files of a run share it. A failure is an OutputError naming the file."""
+    import netCDF4
     try:
         ds = netCDF4.Dataset(path, "w", format=FORMAT)
     except (OSError, RuntimeError) as err:
@@ -229,6 +233,7 @@ class NetcdfWriter(ScheduledWriter):
         for bit) and stays. The particle dimension stays; the schedule counts the kept
         frames as written.
         """
+        import netCDF4
         path = Path(ctx.output_dir or ".") / FILE_NAME
         if ctx.output_dir is None or not path.exists():
             return  # nothing written before: the first frame creates the file
@@ -255,6 +260,7 @@ class NetcdfWriter(ScheduledWriter):
 
 def _rewrite_first(path: Path, keep: int) -> None:
     """Replace ``path`` by a copy holding only its first ``keep`` frames (atomic rename)."""
+    import netCDF4
     tmp = path.with_name(f".{path.name}.tmp")
     try:
         with netCDF4.Dataset(path) as src, netCDF4.Dataset(tmp, "w", format=src.data_model) as dst:

@@ -21,11 +21,14 @@ import os
 import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import meshio
 import numpy as np
 
 from sphcore.api import hookimpl, OutputError, ScheduledWriter
+
+if TYPE_CHECKING:  # meshio is imported where a file is written: a run without VTU output
+    import meshio  # (or a case that only names the table) does not pay its import time
 
 
 TABLE = "vtu"
@@ -63,6 +66,8 @@ def frame_mesh(state) -> meshio.Mesh:
     radius (m), kind, id. The frame time lives in the .pvd: meshio 5.3's VTU writer drops
     field data, so a per-file TimeValue cannot be stored through it.
     """
+    import meshio
+
     order = np.argsort(state.id, kind="stable")
     n, dim = state.pos.shape
     points = np.zeros((n, 3))
@@ -84,6 +89,8 @@ def frame_mesh(state) -> meshio.Mesh:
 
 def walls_mesh(faces) -> meshio.Mesh:
     """Wall faces as a meshio Mesh (points padded to 3D), cell data "normal" (3 components)."""
+    import meshio
+
     nf, dim = faces.count, faces.dim
     pts = np.zeros((nf * dim, 3))
     pts[:, :dim] = faces.verts.reshape(-1, dim)
@@ -135,6 +142,8 @@ class VtuWriter(ScheduledWriter):
 
     def write_frame(self, ctx) -> Path:
         """Write the current state as the next frame and rewrite the collection; returns the .vtu."""
+        import meshio
+
         if ctx.output_dir is None:
             raise OutputError("vtu: this run has no output directory")
         out = Path(ctx.output_dir)

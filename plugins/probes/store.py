@@ -13,11 +13,14 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import netCDF4
 import numpy as np
 
 from sphcore_plugins.netcdf import _fail, _rewrite_first, case_attributes, new_dataset
+
+if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
+    import netCDF4
 
 FILE_NAME = "probes.nc"
 CSV_NAME = "probes.csv"
@@ -26,6 +29,7 @@ MODE_CODES = {"": -1, "wall": 0, "particle": 1}
 
 
 def _chars(names):
+    import netCDF4
     width = max(1, max(len(s) for s in names))
     return netCDF4.stringtochar(np.array(list(names), dtype=f"S{width}")), width
 
@@ -110,6 +114,7 @@ class ProbeFile:
         """Reopen an earlier run's file, keep the leading complete samples with step <= ``last_step``
         and go on appending; returns the kept series {time, step, pressure, depth, dry}, or None
         when there is no file."""
+        import netCDF4
         if not self.path.exists():
             return None
         try:
