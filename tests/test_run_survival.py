@@ -288,7 +288,7 @@ def inject_full_disk(monkeypatch, point: str, after: int):
     """Make the ``after``-th+1 write at ``point`` fail as on a full disk (half a file written first)."""
     import pathlib
 
-    import sphcore_plugins.vtu as vtu
+    import meshio  # the VTU writer imports it where it writes: patch the module itself
 
     calls = {"n": 0}
 
@@ -297,14 +297,14 @@ def inject_full_disk(monkeypatch, point: str, after: int):
         return calls["n"] > after
 
     if point == "frame":
-        real = vtu.meshio.write
+        real = meshio.write
 
         def write(path, *a, **k):
             if due():
                 Path(path).write_bytes(b"<VTKFile half")
                 raise _enospc(path)
             return real(path, *a, **k)
-        monkeypatch.setattr(vtu.meshio, "write", write)
+        monkeypatch.setattr(meshio, "write", write)
     elif point == "checkpoint":
         real = np.savez
 
