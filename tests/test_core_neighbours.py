@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sphcore.neighbours import CellGrid, neighbour_pairs
+from sphcore.neighbours import CellGrid, candidates_bound, forward_pairs, forward_rows, neighbour_pairs
 
 CELL_SIZES = [0.1, 0.25, 0.3, 1.0, 0.013]
 MAX_CELLS = 7  # per axis of the drawn point sets
@@ -64,6 +64,41 @@ def point_sets(draw, dim: int):
     pos = pos[list(order)]
     shift = draw(st.sampled_from([0.0, -3.7, 1e3]))
     return np.ascontiguousarray(pos + shift), cs
+
+
+@settings(max_examples=120, deadline=None)
+@given(data=st.one_of(point_sets(2), point_sets(3)), frac=st.floats(0.05, 1.0), reach=st.sampled_from([1, 2, 3]),
+       dest=st.floats(0.0, 1.0))
+def test_forward_partner_lists_hold_every_pair_once(data, frac, reach, dest):
+    """The pair loop's partner lists (rows of cells, the particles after each in cell
+    order): over all particles every pair closer than the radius appears exactly once, no
+    pair of two sources (index >= n_dest) appears, and each list keeps the order of the
+    cell walk (rows and cells in stencil order, particles in ``order``)."""
+    pos, cs = data
+    n, dim = pos.shape
+    n_dest = int(round(dest * n))
+    radius = frac * cs
+    grid = CellGrid(pos, cs, reach)
+    view = grid.view
+    spos = np.ascontiguousarray(pos[grid.order])
+    rows = np.empty((view.nbr.shape[1] // 2 + 1, 2), np.int64)
+    buf = np.empty(candidates_bound(view), np.int64)
+    found = []
+    rank = np.empty(n, np.int64)
+    rank[grid.order] = np.arange(n)
+    for c in range(grid.ncells):
+        nrows = forward_rows(c, view, dim, rows)
+        for k in range(view.cell_start[c], view.cell_start[c + 1]):
+            count = forward_pairs(k, n_dest, spos, grid.order, rows, nrows, radius * radius, buf)
+            i = int(grid.order[k])
+            partners = buf[:count].tolist()
+            found += [(min(i, j), max(i, j)) for j in partners]
+            # same cell or later rows: the ranks of the own cell's partners increase
+            own = [j for j in partners if grid.pcell[j] == c]
+            assert [rank[j] for j in own] == sorted(rank[j] for j in own)
+    assert len(found) == len(set(found)), "a pair was listed twice"
+    expected = {(i, j) for i, j in brute_force_pairs(pos, radius) if i < j and (i < n_dest or j < n_dest)}
+    assert set(found) == expected
 
 
 @settings(max_examples=150, deadline=None)
