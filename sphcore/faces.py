@@ -71,7 +71,7 @@ class Faces:
     def distances(self, pos: np.ndarray) -> np.ndarray:
         """(n,) distance (m) of each point to the nearest face (inf without faces)."""
         pos = np.ascontiguousarray(pos, dtype=np.float64)
-        return _min_distance(self.verts, pos)
+        return _nearest(self.verts, pos)[2]
 
     def nearest(self, pos: np.ndarray):
         """For each point: (the nearest point on any face (n, dim) m, that face's index (n,),
@@ -162,19 +162,9 @@ def box(lo, hi) -> np.ndarray:
 
 
 @njit(cache=True, parallel=True)
-def _min_distance(verts, pos):
-    n = pos.shape[0]
-    out = np.full(n, np.inf)
-    three = pos.shape[1] == 3
-    for i in numba.prange(n):
-        z = pos[i, 2] if three else 0.0
-        for f in range(verts.shape[0]):
-            out[i] = min(out[i], face_distance(verts, f, pos[i, 0], pos[i, 1], z))
-    return out
-
-
-@njit(cache=True, parallel=True)
 def _nearest(verts, pos):
+    """(nearest point (n, dim), its face (n,), distance (n,)) over all faces, brute force;
+    no faces: distance inf."""
     n, dim = pos.shape
     pts = np.zeros((n, dim))
     face = np.zeros(n, np.int64)
