@@ -41,7 +41,7 @@ from numba import njit, prange
 
 from .corrections import _corrected
 from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
-from .neighbours import candidates_bound, forward_pairs, forward_rows
+from .neighbours import candidates_bound, forward_pairs, forward_rows, separation
 from .parallel import PARALLEL_MIN
 from .wall_completion import _complete_at_wall
 
@@ -217,18 +217,13 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
             pi_r = work[i, 4]
             irho_i = work[i, 5]
             near_i = walls and di and wall.share[i] > 0.0
-            # particle i's position and velocity in scalars, loaded once (as gravity above)
-            xi0, xi1 = pos[i, 0], pos[i, 1]
-            xi2 = pos[i, 2] if dim == 3 else 0.0
+            # particle i's velocity in scalars, loaded once (as gravity above)
             vi0, vi1 = vel[i, 0], vel[i, 1]
             vi2 = vel[i, 2] if dim == 3 else 0.0
             for u in range(forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf)):
                 j = buf[u]
                 dj = j < n_dest
-                x0 = xi0 - pos[j, 0]  # as sphcore.neighbours.separation
-                x1 = xi1 - pos[j, 1]
-                x2 = xi2 - pos[j, 2] if dim == 3 else 0.0
-                r2 = x0 * x0 + x1 * x1 + x2 * x2
+                x0, x1, x2, r2 = separation(pos, i, j, dim)
                 r = np.sqrt(r2)
                 f = fscale * kernel_f_of_q(kid, r * inv_h)
                 g0 = f * x0  # grad_i W_ij = -grad_j W_ji
