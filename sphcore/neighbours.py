@@ -140,10 +140,9 @@ def forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf):
     cells of side 2h), and as a branch in the pair loop it is mispredicted often in a
     flow (on a lattice at rest the predictor learns the pattern); here it is a branch-free
     compaction over positions contiguous in memory (the index is always stored, the count
-    advances only when the test passes), and the pair loop then runs over partners only.
-    Measured with one thread (median of 9 x 200 calls of ``sph_rates``): the seed's dam
-    break at t = 0.15 s (2,592 particles) 0.76 -> 0.65 ms, the 3D dam break at t = 0.05 s
-    (16,384 particles) 19.8 -> 16.7 ms.
+    advances only when the test passes), and the pair loop then runs over partners only
+    (measured change by change in docs/speed.md, "The pair loop";
+    ``benchmarks/bench_pairs.py`` prints today's figure).
     """
     dim = spos.shape[1]
     p0 = spos[k, 0]
