@@ -8,8 +8,13 @@ v_ij = v_i - v_j, grad_i W_ij = F_ij x_ij (see :mod:`sphcore.kernels`):
 - density diffusion (Molteni & Colagrossi 2009):
   + delta h c0 sum_j 2 psi_ij (m_j / rho_j) (x_ij . grad_i W_ij) / (|x_ij|^2 + eta^2),
   psi_ij = rho_i - rho_j, or with ``diffusion_hydrostatic`` its departure from the
-  hydrostatic stratification (Fourtakas et al. 2019): psi_ij = rho_i - rho_j - (rho0/c0^2) g . x_ij
-  (the linearised hydrostatic density difference rho^H_i - rho^H_j), so water at rest is not diffused
+  hydrostatic stratification (Fourtakas et al. 2019): psi_ij = rho_i - rho_j - k_ij g . x_ij,
+  k_ij g . x_ij the hydrostatic density difference rho^H_i - rho^H_j across the pair, so water at
+  rest is not diffused. Hydrostatics with the Tait equation gives d rho^H / dz = -g rho / c^2(rho),
+  c^2 = dp/drho = c0^2 (rho/rho0)^(gamma - 1), so k = rho / c^2 = (rho0/c0^2) (rho/rho0)^(2 - gamma);
+  k_ij = (k_i + k_j)/2 is the trapezoidal rule of that integral (error O(|x_ij|^3)), where
+  k = rho0/c0^2 (Fourtakas et al.'s linearisation about rho0) leaves the curvature of the
+  stratification, O(|x_ij|^2), to be diffused: 2.4% of the gradient at the floor of a 1 m tank
 - momentum (Monaghan 1994): dv_i/dt = g - sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad_i W_ij
 - artificial viscosity (Monaghan 1992): for v_ij . x_ij < 0,
   mu_ij = h v_ij . x_ij / (|x_ij|^2 + eta^2), Pi_ij = (-alpha c0 mu_ij + beta mu_ij^2) / rho_bar
@@ -94,8 +99,9 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     and its forward neighbours (:mod:`sphcore.neighbours`); slabs of the same parity run in
     parallel without touching the same particle, so the result does not depend on the
     number of threads. A pair of two plugin sources (ghosts) is skipped, a pair of a fluid
-    particle and a source acts on the fluid particle only. ``work`` (n_sources, 6) is
-    scratch (the near-wall sums of the wall completion, p/rho^2 and 1/rho), ``spos``
+    particle and a source acts on the fluid particle only. ``work`` (n_sources, 7) is
+    scratch (the near-wall sums of the wall completion, p/rho^2, 1/rho and the hydrostatic
+    density gradient factor k of the density diffusion), ``spos``
     (n_sources, dim) scratch for the positions in cell order; ``nth``:
     numba's thread count (only the balance between threads depends on it).
 
@@ -111,10 +117,10 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     # element-wise passes: a parallel launch costs more than the work below PARALLEL_MIN
     if n_src >= PARALLEL_MIN:
         for i in prange(n_src):
-            _prepare(i, n_dest, dim, src, grid.order, acc, drho, work, spos)
+            _prepare(i, n_dest, dim, src, grid.order, prm, acc, drho, work, spos)
     else:
         for i in range(n_src):
-            _prepare(i, n_dest, dim, src, grid.order, acc, drho, work, spos)
+            _prepare(i, n_dest, dim, src, grid.order, prm, acc, drho, work, spos)
     slab_start = grid.slab_start
     nslab = slab_start.shape[0] - 1
     nbuf = candidates_bound(grid)
@@ -152,9 +158,10 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
 
 
 @njit(cache=True, inline="always")
-def _prepare(i, n_dest, dim, src, order, acc, drho, work, spos):
-    """Zero particle i's rates and sums; its p/rho^2 and 1/rho, per particle rather than
-    per pair (divisions are slow); row i of the positions in cell order."""
+def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
+    """Zero particle i's rates and sums; its p/rho^2, 1/rho and (with hydrostatic density
+    diffusion) k = rho / c^2(rho), per particle rather than per pair (divisions and powers
+    are slow); row i of the positions in cell order."""
     for d in range(dim):
         spos[i, d] = src.pos[order[i], d]
     rho_i = src.rho[i]
@@ -166,6 +173,8 @@ def _prepare(i, n_dest, dim, src, order, acc, drho, work, spos):
         work[i, d] = 0.0
     work[i, 4] = src.p[i] / (rho_i * rho_i)
     work[i, 5] = 1.0 / rho_i
+    if prm.delta > 0.0 and prm.diffusion_hydrostatic:
+        work[i, 6] = prm.rho0 / (prm.c0 * prm.c0) * (rho_i / prm.rho0) ** (2.0 - prm.gamma)
 
 
 @njit(cache=True)
@@ -188,8 +197,7 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
     do_lam = nu > 0.0
     do_diff = delta > 0.0
     any_visc = do_av or do_lam or do_diff
-    # linearised hydrostatic density gradient rho0 / c0^2 (s^2/m^2 * kg/m^3)
-    diff_h = prm.rho0 / (c0 * c0) if (do_diff and prm.diffusion_hydrostatic) else 0.0
+    diff_h = do_diff and prm.diffusion_hydrostatic  # k_ij g . x_ij subtracted from psi_ij
     dcoef = 2.0 * delta * h * c0
     use_L = prm.kernel_gradient
     n_L = L.shape[0] if use_L else 0
@@ -248,8 +256,8 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
                     rho_j = rho[j]
                     if do_diff:
                         psi = rho_i - rho_j  # psi_ji = -psi_ij
-                        if diff_h != 0.0:
-                            psi -= diff_h * (gv0 * x0 + gv1 * x1 + gv2 * x2)
+                        if diff_h:
+                            psi -= 0.5 * (work[i, 6] + work[j, 6]) * (gv0 * x0 + gv1 * x1 + gv2 * x2)
                         cd = dcoef * psi * xg * ir2
                         dr_i += cd * m_j * work[j, 5]
                         dr_j -= cd * m_i * irho_i

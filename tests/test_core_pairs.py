@@ -87,7 +87,8 @@ def _reference(n_dest, src, prm, L, wall):
             v = vel[i] - vel[j]
             xg = x @ gr
             dr += m[j] * (v @ gr)
-            psi = rho[i] - rho[j] - prm.rho0 / c0 ** 2 * (g @ x)
+            k_i, k_j = (prm.rho0 / c0 ** 2 * (r_ / prm.rho0) ** (2.0 - prm.gamma) for r_ in (rho[i], rho[j]))
+            psi = rho[i] - rho[j] - 0.5 * (k_i + k_j) * (g @ x)
             dr += 2 * prm.delta * h * c0 * psi * m[j] / rho[j] * xg / (r * r + prm.eta2)
             s = p[i] / rho[i] ** 2 + p[j] / rho[j] ** 2
             vx = v @ x
@@ -130,7 +131,7 @@ def test_pair_loop_equals_the_gather_of_every_term(tmp_path, dim, kernel_gradien
         assert src.pos.shape[0] >= PAIRS_PARALLEL_MIN
     acc = np.zeros((n_dest, dim))
     drho = np.zeros(n_dest)
-    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 6)),
+    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 7)),
               np.zeros_like(src.pos), numba.get_num_threads())
     ref_acc, ref_drho = _reference(n_dest, src, prm, L, wall)
     assert np.abs(acc - ref_acc).max() <= 1e-11 * np.abs(ref_acc).max()
@@ -147,7 +148,7 @@ def test_pair_forces_are_equal_and_opposite(tmp_path, dim):
     prm = prm._replace(gravity=np.zeros(3))
     acc = np.zeros((n_dest, dim))
     drho = np.zeros(n_dest)
-    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 6)), np.zeros_like(src.pos), 2)
+    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 7)), np.zeros_like(src.pos), 2)
     force = (src.m[:, None] * acc).sum(axis=0)
     scale = np.abs(src.m[:, None] * acc).sum(axis=0)
     assert np.all(np.abs(force) <= 1e-14 * scale)
@@ -170,7 +171,7 @@ def test_result_does_not_depend_on_the_thread_count(tmp_path, dim):
             numba.set_num_threads(threads)
             acc = np.zeros((n_dest, dim))
             drho = np.zeros(n_dest)
-            sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 6)),
+            sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 7)),
                       np.zeros_like(src.pos), nth)
             out.append((acc, drho))
     finally:
