@@ -49,9 +49,7 @@ class WallIntegralPlugin:
     """Boundary-integral wall terms of the case's planes; one instance per run."""
 
     def __init__(self):
-        self.share = np.zeros(0)
-        self.grad = np.zeros((0, 2))
-        self.hydro = np.zeros((0, 2))
+        self._near = np.zeros(0, np.int64)  # indices of the particles near a plane (scratch)
         self._table = None
         self.walls = None  # finite faces (sphcore.faces.Faces) or None
         self._faces = None
@@ -75,24 +73,20 @@ class WallIntegralPlugin:
     def sph_wall_terms(self, ctx, terms):
         # the kernels are imported on first use: every run loads every installed plugin to
         # validate its tables, and these modules build their tables at import (~0.15 s)
-        from .lattice import lattice_error_tables, subtract_lattice_error
-        from .normals import near_wall_projector
-        from .share import wall_terms
+        from .lattice import lattice_error_tables
+        from .planes import add_plane_terms, near_planes
 
         st, prm = ctx.state, ctx.params
         n, dim = st.n, prm.dim
-        if self.share.shape[0] != n:
-            self.share, self.grad, self.hydro = np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim))
-        wall_terms(st.pos, self.normals, self.offsets, prm.kernel_id, prm.h, prm.gravity, self.share, self.grad,
-                   self.hydro)
+        if self._near.shape[0] < n:
+            self._near = np.empty(n + n // 4, np.int64)
         if self._table is None:
             self._table = lattice_error_tables(prm.kernel_id, prm.h, prm.dx, dim, prm.moment_norm)
-        subtract_lattice_error(st.pos, self.normals, self.offsets, *self._table, prm.support, prm.moment_norm,
-                               prm.gravity, self.grad, self.hydro, terms.fill)
-        np.add(terms.share, self.share, out=terms.share)  # several wall plugins add up
-        np.add(terms.grad, self.grad, out=terms.grad)
-        np.add(terms.hydro, self.hydro, out=terms.hydro)
-        near_wall_projector(st.pos, self.normals, self.offsets, prm.support, terms.normals)
+        # the terms of the planes, for the particles within 2h of one (the core zeroed the arrays)
+        count = near_planes(st.pos, self.normals, self.offsets, prm.support, self._near)
+        add_plane_terms(self._near, count, st.pos, self.normals, self.offsets, prm.kernel_id, prm.h, prm.gravity,
+                        *self._table, prm.support, prm.moment_norm, terms.share, terms.grad, terms.hydro,
+                        terms.fill, terms.normals)
         if self.walls is not None:
             from sphcore.api import build_grid
 

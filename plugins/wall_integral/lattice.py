@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from sphcore.api import kernel_f, kernel_w, particle_distance
 
@@ -129,79 +129,78 @@ def _normal_part(normals, k, v, dim):
     return c
 
 
-@njit(cache=True, parallel=True)
-def subtract_lattice_error(pos, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad, hydro,
-                           fill):
-    """Per particle, over the walls within ``support`` (inward normals n_a): grad (n, dim,
+@njit(cache=True, inline="always")
+def subtract_one(i, pos, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad, hydro, fill):
+    """For particle i, over the walls within ``support`` (inward normals n_a): grad (n, dim,
     1/m) -= sum_a E_a n_a, hydro (n, dim, m/s^2) -= (F / lam) g_t (g_t the part of g along
     every one of those walls) and fill (n,) += Gamma, the neighbour sum sum_j V_j W_ij a
     particle of the initial lattice has there (the core compares the particle's own sum
     with it: a particle with fewer neighbours than the lattice, a splash or a film, gets a
     proportionally smaller wall completion). Up to ``dim`` mutually perpendicular walls take
     one orthant table; other combinations (a V tank's apex) add their single-wall errors
-    and deficits of Gamma.
+    and deficits of Gamma. Nothing is written for a particle farther than ``support`` from
+    every wall.
     """
-    n, dim = pos.shape
+    dim = pos.shape[1]
     nk = normals.shape[0]
     full = tab1[tab1.shape[0] - 1, 2]  # Gamma of an interior particle (last node: 2h from the wall)
-    for i in prange(n):
-        cnt = 0
-        k0 = k1 = k2 = -1
-        for k in range(nk):
-            if particle_distance(normals, offsets, k, pos, i) < support:
-                if cnt == 0:
-                    k0 = k
-                elif cnt == 1:
-                    k1 = k
-                elif cnt == 2:
-                    k2 = k
-                cnt += 1
-        if cnt == 0:
-            continue
-        perp = cnt <= dim
-        if perp and cnt >= 2:
-            c01 = 0.0
-            c02 = 0.0
-            c12 = 0.0
-            for a in range(dim):
-                c01 += normals[k0, a] * normals[k1, a]
-                if cnt == 3:
-                    c02 += normals[k0, a] * normals[k2, a]
-                    c12 += normals[k1, a] * normals[k2, a]
-            perp = abs(c01) <= PERP_TOL and abs(c02) <= PERP_TOL and abs(c12) <= PERP_TOL
-        if perp:
-            tab = tab1 if cnt == 1 else (tab2 if cnt == 2 else tab3)
-            d0 = particle_distance(normals, offsets, k0, pos, i)
-            d1 = particle_distance(normals, offsets, k1, pos, i) if cnt > 1 else 0.0
-            d2 = particle_distance(normals, offsets, k2, pos, i) if cnt > 2 else 0.0
-            f = _interp(nodes, tab, cnt, d0, d1, d2, cnt) / lam
-            fill[i] += _interp(nodes, tab, cnt, d0, d1, d2, cnt + 1)
-            # the first moment's error lies along the walls: g minus its parts along every normal
-            g0, g1, g2 = gravity[0], gravity[1], gravity[2]
-            for a in range(cnt):
-                k = k0 if a == 0 else (k1 if a == 1 else k2)
-                gn = _normal_part(normals, k, gravity, dim)
-                g0 -= gn * normals[k, 0]
-                g1 -= gn * normals[k, 1]
-                if dim == 3:
-                    g2 -= gn * normals[k, 2]
-                e = _interp(nodes, tab, cnt, d0, d1, d2, a)
-                for x in range(dim):
-                    grad[i, x] -= e * normals[k, x]
-            hydro[i, 0] -= f * g0
-            hydro[i, 1] -= f * g1
+    cnt = 0
+    k0 = k1 = k2 = -1
+    for k in range(nk):
+        if particle_distance(normals, offsets, k, pos, i) < support:
+            if cnt == 0:
+                k0 = k
+            elif cnt == 1:
+                k1 = k
+            elif cnt == 2:
+                k2 = k
+            cnt += 1
+    if cnt == 0:
+        return
+    perp = cnt <= dim
+    if perp and cnt >= 2:
+        c01 = 0.0
+        c02 = 0.0
+        c12 = 0.0
+        for a in range(dim):
+            c01 += normals[k0, a] * normals[k1, a]
+            if cnt == 3:
+                c02 += normals[k0, a] * normals[k2, a]
+                c12 += normals[k1, a] * normals[k2, a]
+        perp = abs(c01) <= PERP_TOL and abs(c02) <= PERP_TOL and abs(c12) <= PERP_TOL
+    if perp:
+        tab = tab1 if cnt == 1 else (tab2 if cnt == 2 else tab3)
+        d0 = particle_distance(normals, offsets, k0, pos, i)
+        d1 = particle_distance(normals, offsets, k1, pos, i) if cnt > 1 else 0.0
+        d2 = particle_distance(normals, offsets, k2, pos, i) if cnt > 2 else 0.0
+        f = _interp(nodes, tab, cnt, d0, d1, d2, cnt) / lam
+        fill[i] += _interp(nodes, tab, cnt, d0, d1, d2, cnt + 1)
+        # the first moment's error lies along the walls: g minus its parts along every normal
+        g0, g1, g2 = gravity[0], gravity[1], gravity[2]
+        for a in range(cnt):
+            k = k0 if a == 0 else (k1 if a == 1 else k2)
+            gn = _normal_part(normals, k, gravity, dim)
+            g0 -= gn * normals[k, 0]
+            g1 -= gn * normals[k, 1]
             if dim == 3:
-                hydro[i, 2] -= f * g2
-        else:
-            gam = full
-            for k in range(nk):
-                d = particle_distance(normals, offsets, k, pos, i)
-                if d < support:
-                    e = _interp(nodes, tab1, 1, d, 0.0, 0.0, 0)
-                    f = _interp(nodes, tab1, 1, d, 0.0, 0.0, 1) / lam
-                    gam -= full - _interp(nodes, tab1, 1, d, 0.0, 0.0, 2)
-                    gn = _normal_part(normals, k, gravity, dim)
-                    for a in range(dim):
-                        grad[i, a] -= e * normals[k, a]
-                        hydro[i, a] -= f * (gravity[a] - gn * normals[k, a])
-            fill[i] += max(gam, 0.0)
+                g2 -= gn * normals[k, 2]
+            e = _interp(nodes, tab, cnt, d0, d1, d2, a)
+            for x in range(dim):
+                grad[i, x] -= e * normals[k, x]
+        hydro[i, 0] -= f * g0
+        hydro[i, 1] -= f * g1
+        if dim == 3:
+            hydro[i, 2] -= f * g2
+    else:
+        gam = full
+        for k in range(nk):
+            d = particle_distance(normals, offsets, k, pos, i)
+            if d < support:
+                e = _interp(nodes, tab1, 1, d, 0.0, 0.0, 0)
+                f = _interp(nodes, tab1, 1, d, 0.0, 0.0, 1) / lam
+                gam -= full - _interp(nodes, tab1, 1, d, 0.0, 0.0, 2)
+                gn = _normal_part(normals, k, gravity, dim)
+                for a in range(dim):
+                    grad[i, a] -= e * normals[k, a]
+                    hydro[i, a] -= f * (gravity[a] - gn * normals[k, a])
+        fill[i] += max(gam, 0.0)

@@ -8,7 +8,7 @@ one plane, the identity where planes of independent normals meet (corners, edges
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from sphcore.api import particle_distance
 
@@ -38,28 +38,28 @@ def _add_direction(basis, count, dim, v0, v1, v2):
     return basis, count + 1
 
 
-@njit(cache=True, parallel=True)
-def near_wall_projector(pos, normals, offsets, support, q):
-    """q[i] (dim, dim) <- projector onto span(q[i], normals of the planes with d < support)."""
-    n, dim = pos.shape
-    for i in prange(n):
-        near = False
-        for k in range(normals.shape[0]):
-            near = near or particle_distance(normals, offsets, k, pos, i) < support
-        if not near:  # the bulk, far from every wall: q stays as it is
-            continue
-        basis = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        count = 0
-        for a in range(dim):  # what another wall plugin put there: its columns span its walls
-            basis, count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a],
-                                          q[i, 2, a] if dim == 3 else 0.0)
-        for k in range(normals.shape[0]):
-            if particle_distance(normals, offsets, k, pos, i) < support:
-                basis, count = _add_direction(basis, count, dim, normals[k, 0], normals[k, 1],
-                                              normals[k, 2] if dim == 3 else 0.0)
-        for a in range(dim):
-            for b in range(dim):
-                s = 0.0
-                for c in range(count):
-                    s += basis[3 * c + a] * basis[3 * c + b]
-                q[i, a, b] = s
+@njit(cache=True, inline="always")
+def project_one(i, pos, normals, offsets, support, q):
+    """q[i] (dim, dim) <- projector onto span(q[i], normals of the planes with d < support);
+    q[i] stays as it is for a particle farther than ``support`` from every plane."""
+    dim = pos.shape[1]
+    near = False
+    for k in range(normals.shape[0]):
+        near = near or particle_distance(normals, offsets, k, pos, i) < support
+    if not near:
+        return
+    basis = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    count = 0
+    for a in range(dim):  # what another wall plugin put there: its columns span its walls
+        basis, count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a],
+                                      q[i, 2, a] if dim == 3 else 0.0)
+    for k in range(normals.shape[0]):
+        if particle_distance(normals, offsets, k, pos, i) < support:
+            basis, count = _add_direction(basis, count, dim, normals[k, 0], normals[k, 1],
+                                          normals[k, 2] if dim == 3 else 0.0)
+    for a in range(dim):
+        for b in range(dim):
+            s = 0.0
+            for c in range(count):
+                s += basis[3 * c + a] * basis[3 * c + b]
+            q[i, a, b] = s
