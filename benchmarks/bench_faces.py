@@ -11,8 +11,10 @@ particle tests only the faces listed in the grid cells around it.
     python benchmarks/bench_faces.py --wall-model     # the wall model's share instead
 
 With ``--wall-model`` each F runs the case with reflective walls alone and with the wall
-model (``wall_integral``: planes and faces) in alternation and prints the wall model's
-share of a step, (t_model - t_alone) / t_model, medians.
+model (``wall_integral``: planes and faces; the faces' terms exact and from the table, see
+``--face-terms``) in alternation and prints the wall model's share of a step,
+(t_model - t_alone) / t_model, medians, and the first step's wall time (numba compile from
+the cache, and for the table its construction).
 
 Figures are printed, never asserted: run by hand on a quiet machine.
 """
@@ -79,8 +81,8 @@ def sphere_mesh(path: Path, faces: int, centre=(0.25, 0.25, 0.2), radius=0.1) ->
     return len(tris)
 
 
-def setup(tmp: Path, faces: int, plugins='["reflective"]'):
-    d = tmp / f"f{faces}{len(plugins)}"
+def setup(tmp: Path, faces: int, plugins='["reflective"]', sets=()):
+    d = tmp / f"f{faces}{len(plugins)}{len(sets) and sets[0][-5:]}"
     d.mkdir()
     walls = ""
     count = 0
@@ -88,9 +90,11 @@ def setup(tmp: Path, faces: int, plugins='["reflective"]'):
         count = sphere_mesh(d / "sphere.stl", faces)
         walls = '[[domain.walls]]\nshape = "mesh"\nfile = "sphere.stl"'
     (d / "case.toml").write_text(CASE.format(walls=walls, plugins=plugins))
-    case, pm = runner.load(d)
+    case, pm = runner.load(d, list(sets))
     sim = Simulation(case, pm)
-    sim.advance()  # compile, warm caches
+    t0 = time.perf_counter()
+    sim.advance()  # compile, warm caches (and build the wall model's face table)
+    sim.first_step_s = time.perf_counter() - t0
     return sim, count, case
 
 
@@ -100,6 +104,8 @@ def main():
     ap.add_argument("--steps", type=int, default=5)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--wall-model", action="store_true", help="the wall model's share of a step")
+    ap.add_argument("--face-terms", nargs="+", default=["exact", "table"], choices=["exact", "table"],
+                    help="with --wall-model: wall_integral.faces values to measure")
     a = ap.parse_args()
     import numba
 
@@ -151,17 +157,25 @@ def wall_model_share(a):
 
     with tempfile.TemporaryDirectory() as tmp:
         print(f"3D water at rest, a submerged sphere of F faces, numba threads={numba.get_num_threads()}, "
-              f"median of {a.repeat} alternating runs of {a.steps} steps, plain Tait")
-        print(f"{'faces':>7} {'particles':>9} {'alone ms':>9} {'model ms':>9} {'share':>7}")
+              f"median of {a.repeat} alternating runs of {a.steps} steps, plain Tait; the wall model's faces "
+              f"{' / '.join(a.face_terms)} (wall_integral.faces)")
+        print(f"{'faces':>7} {'particles':>9} {'alone ms':>9}" + "".join(
+            f" {m + ' ms':>10} {'share':>7} {'first s':>8}" for m in a.face_terms))
         for f in a.faces:
             alone, count, _ = setup(Path(tmp), f)
-            model = setup(Path(tmp), f, '["reflective", "wall_integral"]')[0]
-            ta, tm = [], []
+            models = [setup(Path(tmp), f, '["reflective", "wall_integral"]', [f"wall_integral.faces={m!r}"])[0]
+                      for m in a.face_terms]
+            ta, tm = [], [[] for _ in models]
             for _ in range(a.repeat):
                 ta.append(per_step(alone, a.steps))
-                tm.append(per_step(model, a.steps))
-            t0, t1 = statistics.median(ta), statistics.median(tm)
-            print(f"{count:>7} {alone.state.n:>9} {1e3 * t0:>9.2f} {1e3 * t1:>9.2f} {100 * (t1 - t0) / t1:>6.1f}%")
+                for k, model in enumerate(models):
+                    tm[k].append(per_step(model, a.steps))
+            t0 = statistics.median(ta)
+            row = f"{count:>7} {alone.state.n:>9} {1e3 * t0:>9.2f}"
+            for model, times in zip(models, tm):
+                t1 = statistics.median(times)
+                row += f" {1e3 * t1:>10.2f} {100 * (t1 - t0) / t1:>6.1f}% {model.first_step_s:>8.2f}"
+            print(row)
             sys.stdout.flush()
 
 

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.api import CaseError, hookimpl
+from sphcore.api import CaseError, Option, hookimpl
 
 
 class WallIntegralPlugin:
@@ -56,8 +56,22 @@ class WallIntegralPlugin:
         self._epoch = 0
 
     @hookimpl
+    def sph_options(self):
+        return {"wall_integral": {
+            "faces": Option("exact", "str", doc="wall terms of finite faces (meshes, boxes, polygons): 'exact' "
+                            "integrates every face within 2h of every particle every step; 'table' computes them "
+                            "once on a grid and interpolates them (much faster next to fine meshes, ~1% error in "
+                            "G: docs/walls.md)", choices=("exact", "table")),
+            "table_spacing": Option(0.25, "float", doc="node spacing of the faces' table, in units of h",
+                                    positive=True),
+            "table_max_nodes": Option(2_000_000, "int", doc="largest table (14 numbers, 112 bytes, a node); a larger one "
+                                      "is not built and the exact integrals are used", min=1),
+        }}
+
+    @hookimpl
     def sph_configure(self, case):
         file = getattr(case, "file", "case.toml")
+        self.cfg = case.config["wall_integral"]
         if not case.config["physics"]["sph"]:
             raise CaseError(file, "plugins.use", "wall_integral completes SPH sums; physics.sph is false")
         faces = getattr(case, "faces", None)
@@ -88,15 +102,36 @@ class WallIntegralPlugin:
                         *self._table, prm.support, prm.moment_norm, terms.share, terms.grad, terms.hydro,
                         terms.fill, terms.normals)
         if self.walls is not None:
-            from sphcore.api import build_grid
-
-            from .facewalls import face_wall_terms, stamps_for
-            if self._faces is None:  # cells of 2h: a particle's support box spans <= 3 per axis
-                verts = np.ascontiguousarray(self.walls.verts, dtype=np.float64)
-                self._faces = (verts, build_grid(verts, prm.support).arrays(), stamps_for(self.walls.count))
-            verts, grid, stamps = self._faces
-            full = float(self._table[1][self._table[1].shape[0] - 1, 2])  # interior lattice sum
-            self._epoch += 1  # the face marks of this call differ from every earlier one's
-            face_wall_terms(st.pos, verts, *grid, stamps, self._epoch, prm.kernel_id, prm.h, prm.gravity,
-                            full, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
+            self._add_face_terms(ctx, terms)
         ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(terms.share))
+
+    def _add_face_terms(self, ctx, terms):
+        """The finite faces' terms: from the table (built on the first call) or exact."""
+        from sphcore.api import build_grid
+
+        from .facetable import build_table, table_wall_terms
+        from .facewalls import face_wall_terms, stamps_for
+
+        st, prm = ctx.state, ctx.params
+        full = float(self._table[1][self._table[1].shape[0] - 1, 2])  # interior lattice sum
+        if self._faces is None:  # cells of 2h: a particle's support box spans <= 3 per axis
+            verts = np.ascontiguousarray(self.walls.verts, dtype=np.float64)
+            grid = build_grid(verts, prm.support).arrays()
+            table = None
+            if self.cfg["faces"] == "table":
+                spacing = self.cfg["table_spacing"] * prm.h
+                table = build_table(verts, grid, prm.kernel_id, prm.h, prm.gravity, spacing,
+                                    self.cfg["table_max_nodes"])
+            self._faces = (verts, grid, stamps_for(self.walls.count), table)
+        verts, grid, stamps, table = self._faces
+        stats = ctx.stats(self)  # in the summary: which terms the faces got, and the table's size
+        stats["face_terms"] = "table" if table is not None else "exact"
+        if self.cfg["faces"] == "table":
+            stats["face_table_nodes"] = int(table.tab.shape[0]) if table is not None else 0
+        if table is not None:
+            table_wall_terms(st.pos, table.lo, table.inv, table.shape, table.tab, full, terms.share, terms.grad,
+                             terms.hydro, terms.fill, terms.normals)
+            return
+        self._epoch += 1  # the face marks of this call differ from every earlier one's
+        face_wall_terms(st.pos, verts, *grid, stamps, self._epoch, prm.kernel_id, prm.h, prm.gravity,
+                        full, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)

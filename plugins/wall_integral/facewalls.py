@@ -38,69 +38,94 @@ def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, epoch
     differ between calls (a mark left by the same particle index in an earlier call would
     hide the face). ``full``: the interior's lattice neighbour sum."""
     n, dim = pos.shape
-    g0, g1 = gravity[0], gravity[1]
-    g2 = gravity[2] if dim == 3 else 0.0
-    support = 2.0 * h
     rows = stamps.shape[0]
     first_mark = epoch * (n + 1)
     for b in prange(rows):
         for i in range(b * n // rows, (b + 1) * n // rows):
-            mark = first_mark + i
             x0, x1 = pos[i, 0], pos[i, 1]
             x2 = pos[i, 2] if dim == 3 else 0.0
-            cx0, cx1, cy0, cy1, cz0, cz1 = box_cells(glo, ginv, gshape, dim, x0, x1, x2, x0, x1, x2, support)
-            s = 0.0
-            gr0 = 0.0
-            gr1 = 0.0
-            gr2 = 0.0
-            t0 = 0.0
-            t1 = 0.0
-            t2 = 0.0
-            near = 0
-            basis = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-            count = 0
-            for cx in range(cx0, cx1 + 1):
-                for cy in range(cy0, cy1 + 1):
-                    for cz in range(cz0, cz1 + 1):
-                        c = (cx * gshape[1] + cy) * gshape[2] + cz
-                        for e in range(gstart[c], gstart[c + 1]):
-                            f = gitems[e]
-                            if stamps[b, f] == mark:
-                                continue
-                            stamps[b, f] = mark
-                            qx, qy, qz = nearest_point(verts, f, x0, x1, x2)
-                            dist = math.sqrt((x0 - qx) ** 2 + (x1 - qy) ** 2 + (x2 - qz) ** 2)
-                            if dist >= support:
-                                continue
-                            if near == 0:  # what the planes (or another plugin) put in q
-                                for a in range(dim):
-                                    basis, count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a],
-                                                                  q[i, 2, a] if dim == 3 else 0.0)
-                            near += 1
-                            fs, fw, m0, m1, m2, n0, n1, n2, d = face_part(kernel_id, x0, x1, x2, verts, f, h)
-                            s, gr0, gr1, gr2, t0, t1, t2 = add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0,
-                                                                    m1, m2, n0, n1, n2, d, h, g0, g1, g2)
-                            if dist > 0.0:
-                                basis, count = _add_direction(basis, count, dim, (x0 - qx) / dist,
-                                                              (x1 - qy) / dist, (x2 - qz) / dist)
+            near, s, gr0, gr1, gr2, t0, t1, t2, basis, count = point_terms(
+                x0, x1, x2, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, b, first_mark + i, kernel_id, h,
+                gravity, q[i])
             if near == 0:
                 continue
-            share[i] += s
-            grad[i, 0] += gr0
-            grad[i, 1] += gr1
-            hydro[i, 0] += t0
-            hydro[i, 1] += t1
-            if dim == 3:
-                grad[i, 2] += gr2
-                hydro[i, 2] += t2
-            ref = fill[i] if fill[i] > 0.0 else full
-            fill[i] = max(ref - s, 1e-3 * full)
-            for a in range(dim):
-                for bb in range(dim):
-                    acc = 0.0
-                    for k in range(count):
-                        acc += basis[3 * k + a] * basis[3 * k + bb]
-                    q[i, a, bb] = acc
+            _add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill)
+            _set_projector(q[i], dim, basis, count)
+
+
+@njit(cache=True, inline="always")
+def _add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill):
+    """share, grad, hydro of particle i += the faces' s, G, T g; its fill reference loses s."""
+    share[i] += s
+    grad[i, 0] += gr0
+    grad[i, 1] += gr1
+    hydro[i, 0] += t0
+    hydro[i, 1] += t1
+    if dim == 3:
+        grad[i, 2] += gr2
+        hydro[i, 2] += t2
+    ref = fill[i] if fill[i] > 0.0 else full
+    fill[i] = max(ref - s, 1e-3 * full)
+
+
+@njit(cache=True, inline="always")
+def _set_projector(qi, dim, basis, count):
+    """qi (dim, dim) <- the projector onto the span of the first ``count`` rows of ``basis``."""
+    for a in range(dim):
+        for bb in range(dim):
+            acc = 0.0
+            for k in range(count):
+                acc += basis[3 * k + a] * basis[3 * k + bb]
+            qi[a, bb] = acc
+
+
+@njit(cache=True)
+def point_terms(x0, x1, x2, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, b, mark, kernel_id, h, gravity,
+                q0):
+    """The faces' terms at the point x: (number of faces within 2h, s, G (3), T g (3), the
+    orthonormal basis (a 9-tuple of rows) of span(q0, directions from the faces' nearest
+    points to x), its size). ``stamps[b]`` with ``mark`` takes each face once (see
+    :func:`face_wall_terms`); q0 (dim, dim): the projector already there (its columns are
+    added first)."""
+    g0, g1 = gravity[0], gravity[1]
+    g2 = gravity[2] if dim == 3 else 0.0
+    support = 2.0 * h
+    cx0, cx1, cy0, cy1, cz0, cz1 = box_cells(glo, ginv, gshape, dim, x0, x1, x2, x0, x1, x2, support)
+    s = 0.0
+    gr0 = 0.0
+    gr1 = 0.0
+    gr2 = 0.0
+    t0 = 0.0
+    t1 = 0.0
+    t2 = 0.0
+    near = 0
+    basis = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    count = 0
+    for cx in range(cx0, cx1 + 1):
+        for cy in range(cy0, cy1 + 1):
+            for cz in range(cz0, cz1 + 1):
+                c = (cx * gshape[1] + cy) * gshape[2] + cz
+                for e in range(gstart[c], gstart[c + 1]):
+                    f = gitems[e]
+                    if stamps[b, f] == mark:
+                        continue
+                    stamps[b, f] = mark
+                    qx, qy, qz = nearest_point(verts, f, x0, x1, x2)
+                    dist = math.sqrt((x0 - qx) ** 2 + (x1 - qy) ** 2 + (x2 - qz) ** 2)
+                    if dist >= support:
+                        continue
+                    if near == 0:  # what the planes (or another plugin) put in q
+                        for a in range(dim):
+                            basis, count = _add_direction(basis, count, dim, q0[0, a], q0[1, a],
+                                                          q0[2, a] if dim == 3 else 0.0)
+                    near += 1
+                    fs, fw, m0, m1, m2, n0, n1, n2, d = face_part(kernel_id, x0, x1, x2, verts, f, h)
+                    s, gr0, gr1, gr2, t0, t1, t2 = add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0,
+                                                            m1, m2, n0, n1, n2, d, h, g0, g1, g2)
+                    if dist > 0.0:
+                        basis, count = _add_direction(basis, count, dim, (x0 - qx) / dist,
+                                                      (x1 - qy) / dist, (x2 - qz) / dist)
+    return near, s, gr0, gr1, gr2, t0, t1, t2, basis, count
 
 
 def stamps_for(nf: int) -> np.ndarray:
