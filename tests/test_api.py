@@ -112,10 +112,21 @@ def test_indexed_override_in_run_and_check(tmp_path, capsys):
     assert "blocks[3].max" in err and "out of range" in err
 
 
-def test_options_of_a_plugin_without_options_says_so(capsys):
-    """`sph options wall_integral` (a plugin with no table) answers, exit 0; an unknown
-    name is refused with exit 2 and the known names, plugins without options included."""
-    assert cli.main(["options", "wall_integral"]) == 0
+def test_options_of_a_plugin_without_options_says_so(capsys, monkeypatch):
+    """`sph options counter` (an installed plugin with no table: every built-in one now has
+    options, so a stand-in is installed here) answers, exit 0; an unknown name is refused
+    with exit 2 and the known names, plugins without options included."""
+    from sphcore import pluginhost
+
+    class Counter:
+        @api.hookimpl
+        def sph_after_step(self, ctx):
+            pass
+
+    plugins = dict(pluginhost.available())
+    plugins["counter"] = pluginhost.PluginInfo("counter", "tests:Counter", "tests", "0", Counter, "", {})
+    monkeypatch.setattr(pluginhost, "available", lambda: plugins)
+    assert cli.main(["options", "counter"]) == 0
     assert "no options" in capsys.readouterr().out
     assert cli.main(["options", "nothere"]) == 2
-    assert "wall_integral" in capsys.readouterr().err
+    assert "counter" in capsys.readouterr().err
