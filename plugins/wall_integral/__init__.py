@@ -3,10 +3,10 @@
 The reflective boundary keeps particles inside but leaves their kernel support truncated at
 the walls: a particle near a wall misses part of its density sum and feels no wall pressure.
 This plugin supplies, through the core's ``sph_wall_terms`` hook, the wall's exact share of
-each particle's kernel support, computed from the wall planes (``share.wall_terms``: closed
-forms for planes, corners and wedges of any angle, 2D and 3D): the share s, its gradient G,
-the hydrostatic moment T g, and the projector onto the near walls' normals
-(``normals.near_wall_projector``). The core completes the sums with them
+each particle's kernel support, computed from the wall planes (``share.py``: closed forms
+for planes, corners and wedges of any angle, 2D and 3D): the share s, its gradient G, the
+hydrostatic moment T g, and the projector onto the near walls' normals (``normals.py``),
+for the particles within 2h of a plane only (``planes.py``). The core completes the sums with them
 (:func:`sphcore.wall_completion._complete_at_wall`):
 
     drho_i/dt = sum_j m_j v_ij . grad W_ij + 2 rho_i v_i . G_w
@@ -29,13 +29,17 @@ state (hydrostatic tank, wall-pressure experiments) is in docs/wall_pressure.md.
 
 Finite walls (``[[domain.walls]]``: obstacles, meshes) add their exact terms too
 (:mod:`.facewalls`, :mod:`.meshfaces`), without the lattice-error correction the planes
-have (see :mod:`.facewalls`).
+have (see :mod:`.facewalls`); with ``faces = "table"`` they are computed once per run on a
+grid and interpolated (:mod:`.facetable`: next to fine meshes the exact integrals cost
+most of a step).
 
 Use it beside ``reflective``, which keeps every particle inside:
-``[plugins] use = ["reflective", "wall_integral", ...]``. No options.
+``[plugins] use = ["reflective", "wall_integral", ...]``. Options (``[wall_integral]``):
+``faces`` ("exact" or "table"), ``table_spacing`` (in h), ``table_max_nodes``.
 
 Run summary (under "wall_integral"): ``near_wall_last``, particles within 2h of a wall at
-the last force evaluation.
+the last force evaluation; with finite walls ``face_terms`` ("exact" or "table") and, when
+a table was asked for, ``face_table_nodes`` (0: too large, the exact terms were used).
 """
 
 from __future__ import annotations

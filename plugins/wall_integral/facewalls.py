@@ -1,5 +1,5 @@
 """Wall terms of finite faces for every particle (``WallTerms`` of the core), beside the
-planes' (``share.wall_terms``, ``lattice.subtract_lattice_error``).
+planes' (``planes.py``); ``facetable.py`` tabulates the same terms once per run.
 
 Per particle, the faces within the kernel support 2h (found through a face grid, each
 face once) add their exact share s, gradient G and moment T g (:mod:`.meshfaces`); the
@@ -25,7 +25,7 @@ from sphcore.api import box_cells, nearest_point
 
 from .meshfaces import face_part
 from .normals import _add_direction
-from .share import add_face
+from .share import add_face, add_terms_to
 
 
 @njit(cache=True, parallel=True)
@@ -56,14 +56,7 @@ def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, epoch
 @njit(cache=True, inline="always")
 def _add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill):
     """share, grad, hydro of particle i += the faces' s, G, T g; its fill reference loses s."""
-    share[i] += s
-    grad[i, 0] += gr0
-    grad[i, 1] += gr1
-    hydro[i, 0] += t0
-    hydro[i, 1] += t1
-    if dim == 3:
-        grad[i, 2] += gr2
-        hydro[i, 2] += t2
+    add_terms_to(i, dim, s, gr0, gr1, gr2, t0, t1, t2, share, grad, hydro)
     ref = fill[i] if fill[i] > 0.0 else full
     fill[i] = max(ref - s, 1e-3 * full)
 

@@ -22,7 +22,7 @@ from sphcore.api import particle_distance
 
 from .lattice import subtract_one
 from .normals import project_one
-from .share import wall_point
+from .share import add_terms_to, wall_point
 
 PARALLEL_NEAR = 4096  # listed particles: below this a parallel launch costs more than the work
 
@@ -67,13 +67,6 @@ def _one(i, pos, normals, offsets, kernel_id, h, gravity, nodes, tab1, tab2, tab
     g2 = gravity[2] if dim == 3 else 0.0
     s, a0, a1, a2, t0, t1, t2 = wall_point(pos[i, 0], pos[i, 1], x2, normals, offsets, kernel_id, h,
                                            gravity[0], gravity[1], g2)
-    share[i] += s
-    grad[i, 0] += a0
-    grad[i, 1] += a1
-    hydro[i, 0] += t0
-    hydro[i, 1] += t1
-    if dim == 3:
-        grad[i, 2] += a2
-        hydro[i, 2] += t2
+    add_terms_to(i, dim, s, a0, a1, a2, t0, t1, t2, share, grad, hydro)
     subtract_one(i, pos, normals, offsets, nodes, tab1, tab2, tab3, support, lam, gravity, grad, hydro, fill)
     project_one(i, pos, normals, offsets, support, q)

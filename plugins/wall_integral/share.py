@@ -197,6 +197,20 @@ def add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0, m1, m2, n0, n1, n2, d, h,
     return s, gr0, gr1, gr2, t0, t1, t2
 
 
+@njit(cache=True, inline="always")
+def add_terms_to(i, dim, s, g0, g1, g2, t0, t1, t2, share, grad, hydro):
+    """share[i] += s, grad[i] += G, hydro[i] += T g (their first ``dim`` components): how
+    each source of wall terms (planes, faces, their table) adds into the core's arrays."""
+    share[i] += s
+    grad[i, 0] += g0
+    grad[i, 1] += g1
+    hydro[i, 0] += t0
+    hydro[i, 1] += t1
+    if dim == 3:
+        grad[i, 2] += g2
+        hydro[i, 2] += t2
+
+
 @njit(cache=True, parallel=True)
 def wall_terms(pos, normals, offsets, kernel_id, h, gravity, share, grad, hydro):
     """Fill share (n,), grad (n, >=dim) and hydro (n, >=dim) for every particle; see module doc.
