@@ -45,12 +45,14 @@ import numpy as np
 from numba import njit, prange
 
 from .corrections import _corrected
+from .eos import _power
 from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
 from .neighbours import candidates_bound, forward_pairs, forward_rows, separation
 from .parallel import PARALLEL_MIN
 from .wall_completion import _complete_at_wall
 
 PAIRS_PARALLEL_MIN = 2048  # particles: the pair loop runs serial below (one thread is faster)
+WORK_COLUMNS = 9  # per-source scratch of sph_rates: see its docstring
 
 
 class Fields(NamedTuple):
@@ -99,9 +101,9 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     and its forward neighbours (:mod:`sphcore.neighbours`); slabs of the same parity run in
     parallel without touching the same particle, so the result does not depend on the
     number of threads. A pair of two plugin sources (ghosts) is skipped, a pair of a fluid
-    particle and a source acts on the fluid particle only. ``work`` (n_sources, 7) is
-    scratch (the near-wall sums of the wall completion, p/rho^2, 1/rho and the hydrostatic
-    density gradient factor k of the density diffusion), ``spos``
+    particle and a source acts on the fluid particle only. ``work`` (n_sources,
+    WORK_COLUMNS) is scratch (the near-wall sums of the wall completion, p/rho^2, 1/rho, and
+    for the density diffusion k/2, the volume m/rho and g . x), ``spos``
     (n_sources, dim) scratch for the positions in cell order; ``nth``:
     numba's thread count (only the balance between threads depends on it).
 
@@ -159,9 +161,10 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
 
 @njit(cache=True, inline="always")
 def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
-    """Zero particle i's rates and sums; its p/rho^2, 1/rho and (with hydrostatic density
-    diffusion) k = rho / c^2(rho), per particle rather than per pair (divisions and powers
-    are slow); row i of the positions in cell order."""
+    """Zero particle i's rates and sums; its p/rho^2, 1/rho and (with density diffusion) its
+    volume m/rho, and (hydrostatic diffusion) k/2 = rho / (2 c^2(rho)) and g . x_i, per
+    particle rather than per pair (divisions and powers are slow, and g . x_ij = g . x_i -
+    g . x_j); row i of the positions in cell order."""
     for d in range(dim):
         spos[i, d] = src.pos[order[i], d]
     rho_i = src.rho[i]
@@ -173,8 +176,15 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
         work[i, d] = 0.0
     work[i, 4] = src.p[i] / (rho_i * rho_i)
     work[i, 5] = 1.0 / rho_i
-    if prm.delta > 0.0 and prm.diffusion_hydrostatic:
-        work[i, 6] = prm.rho0 / (prm.c0 * prm.c0) * (rho_i / prm.rho0) ** (2.0 - prm.gamma)
+    if prm.delta > 0.0:
+        work[i, 7] = src.m[i] / rho_i
+        if prm.diffusion_hydrostatic:  # k/2 and g . x_i: psi_ij's hydrostatic part (k_i + k_j)/2 g . x_ij
+            x = rho_i / prm.rho0  # k = rho / c^2(rho) = (rho0 / c0^2) x^(2 - gamma), without pow
+            work[i, 6] = 0.5 * prm.rho0 / (prm.c0 * prm.c0) * (x * x / _power(x, prm.gamma))
+            gp = 0.0
+            for d in range(dim):
+                gp += prm.gravity[d] * src.pos[i, d]
+            work[i, 8] = gp
 
 
 @njit(cache=True)
@@ -224,6 +234,9 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
             m_i = m[i]
             pi_r = work[i, 4]
             irho_i = work[i, 5]
+            vol_i = work[i, 7]  # density diffusion: m_i / rho_i, k_i / 2, g . x_i
+            kh_i = work[i, 6]
+            gp_i = work[i, 8]
             near_i = walls and di and wall.share[i] > 0.0
             # particle i's velocity in scalars, loaded once (as gravity above)
             vi0, vi1 = vel[i, 0], vel[i, 1]
@@ -257,10 +270,10 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
                     if do_diff:
                         psi = rho_i - rho_j  # psi_ji = -psi_ij
                         if diff_h:
-                            psi -= 0.5 * (work[i, 6] + work[j, 6]) * (gv0 * x0 + gv1 * x1 + gv2 * x2)
+                            psi -= (kh_i + work[j, 6]) * (gp_i - work[j, 8])
                         cd = dcoef * psi * xg * ir2
-                        dr_i += cd * m_j * work[j, 5]
-                        dr_j -= cd * m_i * irho_i
+                        dr_i += cd * work[j, 7]
+                        dr_j -= cd * vol_i
                     if do_av:
                         # approaching pairs only (v_ij . x_ij < 0); min() rather than a branch,
                         # which the CPU would mispredict for half the pairs of a flow

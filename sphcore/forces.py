@@ -16,7 +16,7 @@ import numpy as np
 
 from . import eos
 from .corrections import neighbour_sums
-from .equations import Fields, WallTerms, sph_rates, uniform_acceleration
+from .equations import WORK_COLUMNS, Fields, WallTerms, sph_rates, uniform_acceleration
 from .errors import Instability
 from .neighbours import CellGrid
 
@@ -70,7 +70,7 @@ class Forces:
         self._L = np.zeros((1, 3, 3))
         self._grid = None
         self._shepard = np.zeros(1)
-        self._work = np.zeros((0, 7))
+        self._work = np.zeros((0, WORK_COLUMNS))
         self._spos = np.zeros((0, ctx.params.dim))
         self._src_buf = None  # fluid + plugin sources, reused between evaluations
         self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0),
@@ -144,7 +144,7 @@ class Forces:
         if prm.kernel_gradient and self._L.shape[0] != n:
             self._L = np.zeros((n, 3, 3))
         if self._work.shape[0] < n_src:
-            self._work = np.zeros((n_src + n_src // 4, 7))
+            self._work = np.zeros((n_src + n_src // 4, WORK_COLUMNS))
             self._spos = np.zeros((self._work.shape[0], self.ctx.params.dim))
 
     # -- the evaluation ---------------------------------------------------------------

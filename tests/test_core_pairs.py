@@ -17,7 +17,7 @@ from conftest import make_sim, write_case
 from core_cases import BLOB
 
 from sphcore.corrections import neighbour_sums
-from sphcore.equations import PAIRS_PARALLEL_MIN, Fields, WallTerms, sph_rates
+from sphcore.equations import PAIRS_PARALLEL_MIN, WORK_COLUMNS, Fields, WallTerms, sph_rates
 from sphcore.wall_completion import _complete_at_wall
 from sphcore.kernels import kernel_f, kernel_w
 from sphcore.neighbours import CellGrid
@@ -131,7 +131,7 @@ def test_pair_loop_equals_the_gather_of_every_term(tmp_path, dim, kernel_gradien
         assert src.pos.shape[0] >= PAIRS_PARALLEL_MIN
     acc = np.zeros((n_dest, dim))
     drho = np.zeros(n_dest)
-    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 7)),
+    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], WORK_COLUMNS)),
               np.zeros_like(src.pos), numba.get_num_threads())
     ref_acc, ref_drho = _reference(n_dest, src, prm, L, wall)
     assert np.abs(acc - ref_acc).max() <= 1e-11 * np.abs(ref_acc).max()
@@ -148,7 +148,7 @@ def test_pair_forces_are_equal_and_opposite(tmp_path, dim):
     prm = prm._replace(gravity=np.zeros(3))
     acc = np.zeros((n_dest, dim))
     drho = np.zeros(n_dest)
-    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 7)), np.zeros_like(src.pos), 2)
+    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], WORK_COLUMNS)), np.zeros_like(src.pos), 2)
     force = (src.m[:, None] * acc).sum(axis=0)
     scale = np.abs(src.m[:, None] * acc).sum(axis=0)
     assert np.all(np.abs(force) <= 1e-14 * scale)
@@ -171,7 +171,7 @@ def test_result_does_not_depend_on_the_thread_count(tmp_path, dim):
             numba.set_num_threads(threads)
             acc = np.zeros((n_dest, dim))
             drho = np.zeros(n_dest)
-            sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], 7)),
+            sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], WORK_COLUMNS)),
                       np.zeros_like(src.pos), nth)
             out.append((acc, drho))
     finally:

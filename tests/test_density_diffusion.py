@@ -18,7 +18,7 @@ import numpy as np
 from conftest import make_sim, write_case
 from core_cases import BLOB
 
-from sphcore.equations import Fields, WallTerms, sph_rates
+from sphcore.equations import WORK_COLUMNS, Fields, WallTerms, sph_rates
 from sphcore.neighbours import CellGrid
 
 
@@ -50,7 +50,7 @@ def _column_rates(tmp_path, dim, k_of_rho=None):
         wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)),
                          np.zeros(n), False)
         acc, drho = np.zeros((n, dim)), np.zeros(n)
-        sph_rates(n, src, cells.view, prm, np.zeros((1, 3, 3)), wall, acc, drho, np.zeros((n, 7)),
+        sph_rates(n, src, cells.view, prm, np.zeros((1, 3, 3)), wall, acc, drho, np.zeros((n, WORK_COLUMNS)),
                   np.zeros((n, dim)), 1)
         return drho[interior], rho, c0
     from sphcore.kernels import kernel_f
