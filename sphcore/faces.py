@@ -21,7 +21,7 @@ import numba
 import numpy as np
 from numba import njit
 
-from .facegeom import face_distance, nearest_point
+from .facegeom import nearest_point
 
 @dataclass(frozen=True)
 class Faces:

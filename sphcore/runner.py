@@ -13,7 +13,9 @@ import threading
 import time
 from pathlib import Path
 
-from . import budget, checkpoint, outdir, pluginhost, resume
+import numba
+
+from . import budget, checkpoint, outdir, pluginhost, resume, threads
 from .case import apply_overrides, case_file, parse_override, read_toml, validate
 from .errors import CaseError, Instability, OutputError
 from .overrides import key_text
@@ -128,13 +130,19 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
                                    "wall_time_total_s": past["wall_time_s"] + wall})
         manifest.update()
 
+    tuner, threads_before = threads.tuner_for(case.config), numba.get_num_threads()
+    numba.set_num_threads(tuner.current)
     try:
         if not restart:
             save_checkpoint()  # a restart point exists before any frame, whatever stops the run
         if sim.step == 0:  # a fresh run, or a restart from that first checkpoint: frame 0
             sim.output()
         while not sim.done():
+            t0 = time.perf_counter()
             sim.advance()
+            count = tuner.after_step(time.perf_counter() - t0)
+            if count != numba.get_num_threads():
+                numba.set_num_threads(count)
             sim.output()
             bar.update(sim)
             if stop["signum"] is not None:
@@ -159,6 +167,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
         stop["stopped_by"] = e.signum
     finally:
         bar.close()
+        numba.set_num_threads(threads_before)
         for s, h in old.items():
             signal.signal(s, h)
         wall = time.perf_counter() - start
@@ -171,6 +180,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
             "peak_memory_mb": peak_memory_mb(),
             "c0": sim.params.c0, "h": sim.params.h, "plugins": case.config["plugins"]["use"],
             "counters": dict(sim.counters),
+            "threads": tuner.summary(),
             "segments": segments(status, wall),
             "config": case.config,  # the validated case after --set: what post-processing reads
         }
