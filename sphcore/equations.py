@@ -126,11 +126,15 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     slab_start = grid.slab_start
     nslab = slab_start.shape[0] - 1
     nbuf = candidates_bound(grid)
-    buf = np.empty(nbuf if n_src < PAIRS_PARALLEL_MIN else 0, np.int64)
-    # prange gives each thread one contiguous block of tasks; the slabs differ in size
-    # (water on a floor: the bottom layers hold most particles), so thread k's block holds
-    # the slabs k, k + nth, k + 2 nth, ... Which thread runs a slab does not change the result.
-    # Below PAIRS_PARALLEL_MIN particles the two launches per call cost more than the
+    nrow = grid.nbr.shape[1] // 2 + 1  # forward stencil rows, at most
+    # scratch per thread, allocated once per call: one particle's partners, the rows of a cell
+    buf = np.empty((nth if n_src >= PAIRS_PARALLEL_MIN else 1, nbuf), np.int64)
+    rows = np.empty((buf.shape[0], nrow, 2), np.int64)
+    # The slabs differ in size (water on a floor: the bottom layers hold most particles),
+    # so thread k takes every nth slab of a phase, k, k + nth, ..., rather than a contiguous
+    # block; one task per thread, so its scratch is allocated once per call, not per slab
+    # (per slab: 0.31 ms a call of the seed's dam break on two threads). Which thread runs a
+    # slab does not change the result. Below PAIRS_PARALLEL_MIN particles the two launches per call cost more than the
     # second thread saves (measured: 1,024 particles 0.32 us per particle-step on one
     # thread, 0.37 on two); the serial loop visits the slabs in the same phases, so the
     # additions to each particle come in the same order: the same bits.
@@ -140,17 +144,14 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
             for u in range(ntask):
                 s = 2 * u + phase
                 _slab_pairs(slab_start[s], slab_start[s + 1], n_dest, src, grid, prm, L, wall, acc, drho, work, spos,
-                            buf)
+                            buf[0], rows[0])
             continue
-        block = (ntask + nth - 1) // nth
-        for t in prange(nth * block):
-            u = (t % block) * nth + t // block
-            if u >= ntask:
-                continue
-            s = 2 * u + phase
-            tbuf = np.empty(nbuf, np.int64)  # one per task: a few dozen per call
-            _slab_pairs(slab_start[s], slab_start[s + 1], n_dest, src, grid, prm, L, wall, acc, drho, work, spos,
-                        tbuf)
+        # one task per thread: thread k takes the slabs u = k, k + nth, k + 2 nth, ...
+        for k in prange(nth):
+            for u in range(k, ntask, nth):
+                s = 2 * u + phase
+                _slab_pairs(slab_start[s], slab_start[s + 1], n_dest, src, grid, prm, L, wall, acc, drho, work,
+                            spos, buf[k], rows[k])
     if n_dest >= PARALLEL_MIN:
         for i in prange(n_dest):
             _finish(i, dim, src, prm, wall, acc, drho, work)
@@ -188,7 +189,7 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
 
 
 @njit(cache=True)
-def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf):
+def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf, rows):
     """The pairs of the occupied cells c_first <= c < c_end with themselves and their
     forward neighbours, both ways; ``buf``: scratch for one particle's partners
     (:func:`sphcore.neighbours.forward_pairs`). One call per slab, not per cell: a call
@@ -216,7 +217,6 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
     # store to acc/drho/work, which the compiler cannot prove do not alias it
     gv0, gv1, gv2 = gravity[0], gravity[1], gravity[2]
     order, cell_start = grid.order, grid.cell_start
-    rows = np.empty((grid.nbr.shape[1] // 2 + 1, 2), np.int64)  # forward stencil rows (at most)
     for c in range(c_first, c_end):
         nrows = forward_rows(c, grid, dim, rows)
         for k in range(cell_start[c], cell_start[c + 1]):
