@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sphcore.api import hookimpl, OutputError, ScheduledWriter
+from sphcore.api import hookimpl, Option, OutputError, ScheduledWriter
 
 if TYPE_CHECKING:  # meshio is imported where a file is written: a run without VTU output
     import meshio  # (or a case that only names the table) does not pay its import time
@@ -126,6 +126,18 @@ class VtuWriter(ScheduledWriter):
     def __init__(self):
         super().__init__()
         self.frames: list[tuple[float, str]] = []  # (t in s, file relative to output_dir)
+        self.compression = "zlib"
+
+    @hookimpl
+    def sph_options(self):
+        return {TABLE: {**super().sph_options()[TABLE], "compress": Option(
+            True, "bool", doc="zlib-compress each frame's arrays: about half the file size, 8x the write time "
+            "(2D frame of 2,592 particles: 177 kB in 6.2 ms against 392 kB in 0.8 ms; docs/speed.md)")}}
+
+    @hookimpl
+    def sph_configure(self, case):
+        super().sph_configure(case)
+        self.compression = "zlib" if case.config.get(TABLE, {}).get("compress", True) else None
 
     @hookimpl
     def sph_summary(self, ctx):
@@ -161,7 +173,8 @@ class VtuWriter(ScheduledWriter):
                                lambda tmp: meshio.write(tmp, wmesh, file_format="vtu", binary=True))
         mesh = frame_mesh(ctx.state)
         # binary: base64 of the raw float64 bytes, so the file holds exact values
-        replace_atomically(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu", binary=True))
+        replace_atomically(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu", binary=True,
+                                                          compression=self.compression))
         self.frames.append((float(ctx.t), rel))
         text = pvd_text(self.frames)
         replace_atomically(self.pvd_path(ctx), lambda tmp: tmp.write_text(text))

@@ -18,7 +18,7 @@ CASE_NAME = "dam break"  # a space: the file name must be sanitised
 PVD = "dam_break.pvd"
 
 
-def make_sim(tmp_path, dim=2, every_dt=None, every_steps=None, seed=0):
+def make_sim(tmp_path, dim=2, every_dt=None, every_steps=None, seed=0, compress=True):
     """A stand-in for the core's Simulation: random fields, particles in a shuffled order."""
     rng = np.random.default_rng(seed)
     st = make_block(lattice(np.zeros(dim), np.ones(dim), 0.25), np.zeros(dim), 1000.0, 0.25, 0.1, FLUID)
@@ -26,7 +26,7 @@ def make_sim(tmp_path, dim=2, every_dt=None, every_steps=None, seed=0):
     st.m = rng.uniform(0.5, 1.5, st.n)
     st.radius = rng.uniform(0.05, 0.1, st.n)
     case = SimpleNamespace(name=CASE_NAME, dim=dim, file=str(tmp_path / "case.toml"),
-                           config={"vtu": {"every_dt": every_dt, "every_steps": every_steps}})
+                           config={"vtu": {"every_dt": every_dt, "every_steps": every_steps, "compress": compress}})
     out = tmp_path / "output"
     out.mkdir()
     sim = SimpleNamespace(state=st, t=0.0, step=0, dt=0.004, case=case, output_dir=out, stats={}, restarting=False)
@@ -91,9 +91,9 @@ def read_all(pvd):
     return reader.time_values, frames
 
 
-@pytest.mark.parametrize("dim", [2, 3])
-def test_pvd_holds_every_frame_with_exact_fields(tmp_path, dim):
-    sim, rng = make_sim(tmp_path, dim=dim, every_dt=0.01)
+@pytest.mark.parametrize("dim, compress", [(2, True), (3, True), (2, False)])
+def test_pvd_holds_every_frame_with_exact_fields(tmp_path, dim, compress):
+    sim, rng = make_sim(tmp_path, dim=dim, every_dt=0.01, compress=compress)
     expected = run(sim, rng, configured(sim), steps=12)  # t = 0 .. 0.048 s
     times, frames = read_all(sim.output_dir / PVD)
     assert len(times) == 6  # t = 0, 0.012, 0.020, 0.032, 0.040, 0.048 (final)
@@ -109,6 +109,8 @@ def test_pvd_holds_every_frame_with_exact_fields(tmp_path, dim):
     assert isinstance(pv.read(sim.output_dir / PVD), pv.MultiBlock)
     assert sorted(os.listdir(sim.output_dir / "vtu")) == [f"dam_break_{i:06d}.vtu" for i in range(6)]
     assert not [f for f in os.listdir(sim.output_dir) if f.endswith(".tmp")]
+    head = (sim.output_dir / "vtu" / "dam_break_000000.vtu").read_text()[:300]
+    assert ('compressor="vtkZLibDataCompressor"' in head) == compress
 
 
 def test_every_steps_and_final_frame_not_duplicated(tmp_path):
@@ -139,7 +141,8 @@ def test_both_schedule_keys_is_a_case_error(tmp_path):
 
 def test_options_table():
     table = VtuWriter().sph_options()
-    assert set(table) == {"vtu"} and set(table["vtu"]) == {"every_dt", "every_steps"}
+    assert set(table) == {"vtu"} and set(table["vtu"]) == {"every_dt", "every_steps", "compress"}
+    assert table["vtu"]["compress"].default is True
 
 
 @pytest.mark.parametrize("output_at_restart_step", [False, True])
