@@ -48,7 +48,7 @@ from .corrections import _corrected
 from .eos import _power
 from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
 from .neighbours import candidates_bound, forward_pairs, forward_rows, separation
-from .parallel import PARALLEL_MIN
+from .parallel import PARALLEL_MIN, twin
 from .wall_completion import _complete_at_wall
 
 PAIRS_PARALLEL_MIN = 2048  # particles: the pair loop runs serial below (one thread is faster)
@@ -92,7 +92,9 @@ class WallTerms(NamedTuple):
     active: bool
 
 
-@njit(cache=True, parallel=True)
+DIM = 0  # the spatial dimension: a constant of each compiled twin of the pair loop (see the end)
+
+
 def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     """Accelerations acc (n_dest, dim) in m/s^2 and density rates drho (n_dest,) in kg/m^3/s.
 
@@ -113,8 +115,16 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     symmetrised Bonet & Lok matrix (L_i + L_j)/2 (antisymmetric in i, j, so momentum is
     still conserved); sources beyond ``L.shape[0]`` use the identity. ``wall``: see the
     module docstring.
+
+    The pair loop is compiled once per dimension (``_RATES``), the dimension a constant:
+    0.46 -> 0.42 ms per call of the seed's dam break on one thread, the same bits.
     """
-    dim = src.pos.shape[1]
+    _RATES[src.pos.shape[1]](n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth)
+
+
+def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
+    """:func:`sph_rates` for one dimension, DIM (compiled as twins: see the end)."""
+    dim = DIM
     n_src = src.rho.shape[0]
     # element-wise passes: a parallel launch costs more than the work below PARALLEL_MIN
     if n_src >= PARALLEL_MIN:
@@ -188,7 +198,6 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
             work[i, 8] = gp
 
 
-@njit(cache=True)
 def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf, rows):
     """The pairs of the occupied cells c_first <= c < c_end with themselves and their
     forward neighbours, both ways; ``buf``: scratch for one particle's partners
@@ -196,7 +205,7 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
     passes every field of src, grid, prm and wall (0.67 -> 0.63 ms per evaluation of the
     seed's dam break, one thread)."""
     pos, vel, rho, p, m = src
-    dim = pos.shape[1]
+    dim = DIM
     h, c0 = prm.h, prm.c0
     alpha, beta, nu, delta, eta2 = prm.alpha, prm.beta, prm.nu, prm.delta, prm.eta2
     gravity = prm.gravity
@@ -356,3 +365,10 @@ def uniform_acceleration(gravity, acc):
     for i in range(acc.shape[0]):
         for d in range(dim):
             acc[i, d] = gravity[d]
+
+
+# the pair loop compiled per dimension: DIM a constant in each twin (sphcore.parallel.twin)
+_slab_pairs_2d = njit(cache=True)(twin(_slab_pairs, "_2d", DIM=2))
+_slab_pairs_3d = njit(cache=True)(twin(_slab_pairs, "_3d", DIM=3))
+_RATES = {2: njit(cache=True, parallel=True)(twin(_sph_rates, "_2d", DIM=2, _slab_pairs=_slab_pairs_2d)),
+          3: njit(cache=True, parallel=True)(twin(_sph_rates, "_3d", DIM=3, _slab_pairs=_slab_pairs_3d))}

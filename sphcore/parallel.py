@@ -24,17 +24,29 @@ from numba import njit
 PARALLEL_MIN = 20_000  # particles (rows of the first argument)
 
 
+def twin(pyfunc, suffix: str, **constants):
+    """A copy of the Python function ``pyfunc`` named ``name + suffix``, whose global names
+    ``constants`` are replaced (numba compiles module globals as constants, so a twin with
+    ``DIM=2`` is compiled for 2D only, its ``if DIM == 3`` branches removed). numba's disk
+    cache is indexed by the qualified name: every twin is cached under its own."""
+    glob = pyfunc.__globals__
+    if constants:
+        glob = dict(glob)
+        glob.update(constants)
+    f = types.FunctionType(pyfunc.__code__, glob, pyfunc.__name__ + suffix, pyfunc.__defaults__, pyfunc.__closure__)
+    f.__qualname__ = pyfunc.__qualname__ + suffix
+    f.__doc__ = pyfunc.__doc__
+    f.__module__ = pyfunc.__module__
+    return f
+
+
 def serial_and_parallel(pyfunc, **njit_options):
     """(serial, parallel) numba builds of a prange kernel, each cached on disk under its own
     name: numba's cache is indexed by the function's qualified name, not by the parallel
     flag, so a second build of the same function would load the first one's code
     (measured: both ran serial)."""
     serial = njit(cache=True, **njit_options)(pyfunc)
-    twin = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__ + "_parallel",
-                              pyfunc.__defaults__, pyfunc.__closure__)
-    twin.__qualname__ = pyfunc.__qualname__ + "_parallel"
-    twin.__doc__ = pyfunc.__doc__
-    return serial, njit(cache=True, parallel=True, **njit_options)(twin)
+    return serial, njit(cache=True, parallel=True, **njit_options)(twin(pyfunc, "_parallel"))
 
 
 class by_size:
