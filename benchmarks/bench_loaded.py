@@ -58,9 +58,10 @@ def main():
     ap.add_argument("case", nargs="?", default=str(ROOT / "cases" / "dam_break"))
     ap.add_argument("--pairs", type=int, default=5)
     ap.add_argument("--load", type=int, nargs="+", default=[0, 1], help="busy processes beside the runs")
-    ap.add_argument("--set", action="append", default=['plugins.use=["reflective"]'],
-                    help="case overrides for every run (default: reflective walls, no writers)")
+    ap.add_argument("--set", action="append", default=None,
+                    help="case overrides for every run (default: plugins.use=[\"reflective\"], no writers)")
     a = ap.parse_args()
+    a.set = a.set or ['plugins.use=["reflective"]']
     tmp = Path(tempfile.mkdtemp(prefix="bench_loaded"))
     print(f"case: {a.case} ({' '.join(a.set)}), whole process, {a.pairs} rounds, cores: {os.cpu_count()}")
     for label, (threads, sets) in VARIANTS.items():

@@ -92,7 +92,7 @@ class WallTerms(NamedTuple):
     active: bool
 
 
-DIM = 0  # the spatial dimension: a constant of each compiled twin of the pair loop (see the end)
+DIM = None  # the spatial dimension: a constant of each compiled twin of the pair loop (see the end)
 
 
 def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
@@ -117,7 +117,7 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     module docstring.
 
     The pair loop is compiled once per dimension (``_RATES``), the dimension a constant:
-    0.46 -> 0.42 ms per call of the seed's dam break on one thread, the same bits.
+    0.44 -> 0.35-0.36 ms per call of the seed's dam break on one thread, the same bits.
     """
     _RATES[src.pos.shape[1]](n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth)
 
@@ -133,6 +133,7 @@ def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     else:
         for i in range(n_src):
             _prepare(i, n_dest, dim, src, grid.order, prm, acc, drho, work, spos)
+    nth = max(nth, 1)
     slab_start = grid.slab_start
     nslab = slab_start.shape[0] - 1
     nbuf = candidates_bound(grid)
@@ -143,8 +144,9 @@ def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     # The slabs differ in size (water on a floor: the bottom layers hold most particles),
     # so thread k takes every nth slab of a phase, k, k + nth, ..., rather than a contiguous
     # block; one task per thread, so its scratch is allocated once per call, not per slab
-    # (per slab: 0.31 ms a call of the seed's dam break on two threads). Which thread runs a
-    # slab does not change the result. Below PAIRS_PARALLEL_MIN particles the two launches per call cost more than the
+    # (which cost no measurable time: 0.31 ms a call of the seed's dam break on two threads
+    # either way). Which thread runs a slab does not change the result. Below
+    # PAIRS_PARALLEL_MIN particles the two launches per call cost more than the
     # second thread saves (measured: 1,024 particles 0.32 us per particle-step on one
     # thread, 0.37 on two); the serial loop visits the slabs in the same phases, so the
     # additions to each particle come in the same order: the same bits.
@@ -175,7 +177,9 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
     """Zero particle i's rates and sums; its p/rho^2, 1/rho and (with density diffusion) its
     volume m/rho, and (hydrostatic diffusion) k/2 = rho / (2 c^2(rho)) and g . x_i, per
     particle rather than per pair (divisions and powers are slow, and g . x_ij = g . x_i -
-    g . x_j); row i of the positions in cell order."""
+    g . x_j: pair separations are plain differences of positions, ghosts' included; a
+    periodic domain's minimum-image separation would need g . x_ij per pair again); row i
+    of the positions in cell order."""
     for d in range(dim):
         spos[i, d] = src.pos[order[i], d]
     rho_i = src.rho[i]
@@ -190,7 +194,7 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
     if prm.delta > 0.0:
         work[i, 7] = src.m[i] / rho_i
         if prm.diffusion_hydrostatic:  # k/2 and g . x_i: psi_ij's hydrostatic part (k_i + k_j)/2 g . x_ij
-            x = rho_i / prm.rho0  # k = rho / c^2(rho) = (rho0 / c0^2) x^(2 - gamma), without pow
+            x = rho_i / prm.rho0  # k = rho / c^2(rho) = (rho0 / c0^2) x^(2 - gamma), no pow for gamma = 7
             work[i, 6] = 0.5 * prm.rho0 / (prm.c0 * prm.c0) * (x * x / _power(x, prm.gamma))
             gp = 0.0
             for d in range(dim):
@@ -201,7 +205,8 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
 def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf, rows):
     """The pairs of the occupied cells c_first <= c < c_end with themselves and their
     forward neighbours, both ways; ``buf``: scratch for one particle's partners
-    (:func:`sphcore.neighbours.forward_pairs`). One call per slab, not per cell: a call
+    (:func:`sphcore.neighbours.forward_pairs`), ``rows`` for a cell's forward stencil rows
+    (:func:`sphcore.neighbours.forward_rows`). One call per slab, not per cell: a call
     passes every field of src, grid, prm and wall (0.67 -> 0.63 ms per evaluation of the
     seed's dam break, one thread)."""
     pos, vel, rho, p, m = src

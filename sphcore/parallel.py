@@ -28,7 +28,10 @@ def twin(pyfunc, suffix: str, **constants):
     """A copy of the Python function ``pyfunc`` named ``name + suffix``, whose global names
     ``constants`` are replaced (numba compiles module globals as constants, so a twin with
     ``DIM=2`` is compiled for 2D only, its ``if DIM == 3`` branches removed). numba's disk
-    cache is indexed by the qualified name: every twin is cached under its own."""
+    cache is indexed by the qualified name: every twin is cached under its own. The twin's
+    globals are a copy taken now, and numba's cache checks the source file, not the values:
+    constants must be written in that file (not set or patched at run time), and every
+    name the function uses must exist when the twin is made."""
     glob = pyfunc.__globals__
     if constants:
         glob = dict(glob)

@@ -18,7 +18,8 @@ from .errors import CaseError
 
 #: keys a restart may change: how far to run, and how the run reports and checkpoints
 MAY_DIFFER = {"time.t_end", "output.progress", "output.log_interval_s", "output.checkpoint_every_s",
-              "output.checkpoint_every_dt", "output.dir", "particles.memory_limit_gib", "time.max_steps"}
+              "output.checkpoint_every_dt", "output.dir", "particles.memory_limit_gib", "time.max_steps",
+              "parallel.threads", "parallel.adapt"}  # the same bits for any thread count
 
 
 class CheckpointClock:

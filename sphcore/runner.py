@@ -100,7 +100,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     sim = budget.simulation(case, pm, out, restarting=restart)
     budget.check_first_step(sim)
     manifest = prepare_output(out, overwrite, restart, case.file)
-    if mode != "off" and not kernels_cached():  # the first step compiles the force kernels
+    if mode != "off" and not kernels_cached(case.config["case"]["dim"]):  # the first step compiles the force kernels
         print("[sph] compiling kernels, once (about 10 s; later runs load them from the cache)",
               file=sys.stderr, flush=True)
     past = resume.history(saved)
@@ -203,12 +203,13 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     return summary
 
 
-def kernels_cached() -> bool:
-    """Whether numba's cache holds the force kernel already (else the first step compiles)."""
+def kernels_cached(dim: int = 2) -> bool:
+    """Whether numba's cache holds the force kernel of a ``dim``-dimensional run already
+    (else the first step compiles it; the pair loop is built per dimension)."""
     from . import equations
 
     try:  # where numba itself keeps it (in-tree __pycache__, or the user-wide fallback)
-        places = [Path(equations.sph_rates._cache._cache_path)]
+        places = [Path(equations._RATES[dim]._cache._cache_path)]
     except AttributeError:  # another numba: look where it caches by default
         places = [Path(equations.__file__).parent / "__pycache__"]
-    return any(any(p.glob("equations.sph_rates*.nbi")) for p in places if p.is_dir())
+    return any(any(p.glob(f"equations._sph_rates_{dim}d-*.nbi")) for p in places if p.is_dir())

@@ -285,10 +285,10 @@ def test_ctrl_c_during_set_up_is_one_line_and_writes_nothing(tmp_path, capsys, m
 
 def test_first_run_says_it_compiles(tmp_path, capsys, monkeypatch):
     case_dir = write_case(tmp_path / "case", GOOD_CASE)
-    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda: False)
+    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda dim=2: False)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log")
     assert status == 0 and "[sph] compiling kernels, once" in err
-    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda: True)
+    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda dim=2: True)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log", "--output", tmp_path / "again")
     assert status == 0 and "compiling" not in err
 
@@ -296,7 +296,7 @@ def test_first_run_says_it_compiles(tmp_path, capsys, monkeypatch):
 def test_kernels_cached_finds_the_cache():
     from sphcore import runner
 
-    assert runner.kernels_cached()  # the runs above compiled, and numba cached, the force kernel
+    assert runner.kernels_cached(2)  # the runs above compiled, and numba cached, the 2D force kernel
 
 
 def test_a_step_below_the_round_off_of_t_is_an_instability(tmp_path):
