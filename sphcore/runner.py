@@ -95,14 +95,16 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     if restart:  # continue the same run only: case, version and directory must match (issue 13)
         saved = checkpoint.read_meta(out)
         resume.verify(saved, case, out, out / checkpoint.NAME)
+    # sizing the first step below evaluates the forces: that compiles the force kernels on a
+    # fresh machine (said before it starts; checked after it, the cache would always hold them)
+    if mode != "off" and not kernels_cached(case.config["case"]["dim"]):
+        print("[sph] compiling kernels, once (about 10 s; later runs load them from the cache)",
+              file=sys.stderr, flush=True)
     # particles and plugins are set up, and the first step sized, before anything touches
     # the disk: a case that fails there leaves the output directory as it was
     sim = budget.simulation(case, pm, out, restarting=restart)
     budget.check_first_step(sim)
     manifest = prepare_output(out, overwrite, restart, case.file)
-    if mode != "off" and not kernels_cached(case.config["case"]["dim"]):  # the first step compiles the force kernels
-        print("[sph] compiling kernels, once (about 10 s; later runs load them from the cache)",
-              file=sys.stderr, flush=True)
     past = resume.history(saved)
     stop = {"signum": None}
 

@@ -293,6 +293,21 @@ def test_first_run_says_it_compiles(tmp_path, capsys, monkeypatch):
     assert status == 0 and "compiling" not in err
 
 
+def test_the_cache_is_checked_before_the_first_force_evaluation_compiles(tmp_path, capsys, monkeypatch):
+    """Sizing the first step evaluates the forces, which compiles (and caches) the kernels
+    on a fresh machine: asked after that, the cache would always hold them."""
+    from sphcore import forces
+
+    events = []
+    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda dim=2: events.append("checked") or False)
+    evaluate = forces.Forces.evaluate
+    monkeypatch.setattr(forces.Forces, "evaluate", lambda self, *a, **k: events.append("forces") or evaluate(self, *a, **k))
+    case_dir = write_case(tmp_path / "case", GOOD_CASE)
+    status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log")
+    assert status == 0 and "compiling kernels" in err
+    assert events[0] == "checked" and "forces" in events
+
+
 def test_kernels_cached_finds_the_cache():
     from sphcore import runner
 
