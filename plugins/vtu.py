@@ -59,15 +59,60 @@ def replace_atomically(path: Path, write) -> None:
         raise OutputError(f"{path}: cannot write: {reason}") from err
 
 
-def frame_mesh(state) -> meshio.Mesh:
-    """The particles as a meshio Mesh of vertex cells, sorted by id, padded to 3D.
+VTK_TYPES = {np.dtype(np.float64): "Float64", np.dtype(np.int64): "Int64", np.dtype(np.int8): "Int8",
+             np.dtype(np.uint8): "UInt8"}
+VTK_VERTEX = 1  # VTK's cell type of one point
+BLOCK = 32768  # bytes per compressed block, as VTK writes them
+ZLIB_LEVEL = 1  # within 1 % of level 6's size for particle frames, half the time (docs/speed.md)
+
+
+def _encoded(a: np.ndarray, compress: bool) -> str:
+    """One DataArray's text in VTK's inline ``binary`` format, header UInt64: base64 of the
+    byte count and the raw bytes, or, compressed, base64 of the block table (blocks, block
+    size, last block's size, each block's compressed size) then of the zlib blocks."""
+    import base64
+    import zlib
+
+    raw = np.ascontiguousarray(a).tobytes()
+    if not compress:
+        return base64.b64encode(np.array([len(raw)], "<u8").tobytes() + raw).decode()
+    blocks = [zlib.compress(raw[k:k + BLOCK], ZLIB_LEVEL) for k in range(0, len(raw), BLOCK)]
+    last = len(raw) - BLOCK * (len(blocks) - 1) if blocks else 0
+    head = np.array([len(blocks), BLOCK, last, *map(len, blocks)], "<u8")
+    return base64.b64encode(head.tobytes()).decode() + base64.b64encode(b"".join(blocks)).decode()
+
+
+def _data_array(name: str, a: np.ndarray, compress: bool) -> str:
+    comps = f' NumberOfComponents="{a.shape[1]}"' if a.ndim == 2 else ""
+    return (f'<DataArray type="{VTK_TYPES[a.dtype]}" Name="{name}"{comps} format="binary">'
+            f"{_encoded(a, compress)}</DataArray>\n")
+
+
+def vtu_text(points: np.ndarray, point_data: dict, compress: bool) -> str:
+    """An UnstructuredGrid of one vertex cell per point, as VTK's XML with inline binary
+    arrays (exact float64 values; zlib-compressed blocks when ``compress``). Written here
+    rather than through meshio: meshio's writer compresses at zlib's default level 6 and
+    its import (with its command line and rich) costs ~50 ms of every run's start-up."""
+    n = points.shape[0]
+    comp = ' compressor="vtkZLibDataCompressor"' if compress else ""
+    cells = "".join(_data_array(k, v, compress) for k, v in (
+        ("connectivity", np.arange(n, dtype=np.int64)), ("offsets", np.arange(1, n + 1, dtype=np.int64)),
+        ("types", np.full(n, VTK_VERTEX, np.uint8))))
+    data = "".join(_data_array(k, v, compress) for k, v in point_data.items())
+    return ('<?xml version="1.0"?>\n'
+            f'<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64"{comp}>\n'
+            f'<UnstructuredGrid>\n<Piece NumberOfPoints="{n}" NumberOfCells="{n}">\n'
+            f'<Points>\n{_data_array("Points", points, compress)}</Points>\n'
+            f"<Cells>\n{cells}</Cells>\n<PointData>\n{data}</PointData>\n"
+            "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n")
+
+
+def frame_arrays(state) -> tuple[np.ndarray, dict]:
+    """The particles sorted by id, padded to 3D: points and point data.
 
     Point data: velocity (m/s, 3 components), pressure (Pa), density (kg/m^3), mass (kg),
-    radius (m), kind, id. The frame time lives in the .pvd: meshio 5.3's VTU writer drops
-    field data, so a per-file TimeValue cannot be stored through it.
+    radius (m), kind, id. The frame time lives in the .pvd.
     """
-    import meshio
-
     order = np.argsort(state.id, kind="stable")
     n, dim = state.pos.shape
     points = np.zeros((n, 3))
@@ -83,8 +128,7 @@ def frame_mesh(state) -> meshio.Mesh:
         "kind": np.ascontiguousarray(state.kind[order], dtype=np.int8),
         "id": np.ascontiguousarray(state.id[order], dtype=np.int64),
     }
-    cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
-    return meshio.Mesh(points, cells, point_data=point_data)
+    return points, point_data
 
 
 def walls_mesh(faces) -> meshio.Mesh:
@@ -126,18 +170,18 @@ class VtuWriter(ScheduledWriter):
     def __init__(self):
         super().__init__()
         self.frames: list[tuple[float, str]] = []  # (t in s, file relative to output_dir)
-        self.compression = "zlib"
+        self.compress = True
 
     @hookimpl
     def sph_options(self):
         return {TABLE: {**super().sph_options()[TABLE], "compress": Option(
-            True, "bool", doc="zlib-compress each frame's arrays: about half the file size, 8x the write time "
-            "(2D frame of 2,592 particles: 177 kB in 6.2 ms against 392 kB in 0.8 ms; docs/speed.md)")}}
+            True, "bool", doc="zlib-compress each frame's arrays (level 1): about half the file size, a few times "
+            "the write time (docs/speed.md)")}}
 
     @hookimpl
     def sph_configure(self, case):
         super().sph_configure(case)
-        self.compression = "zlib" if case.config.get(TABLE, {}).get("compress", True) else None
+        self.compress = bool(case.config.get(TABLE, {}).get("compress", True))
 
     @hookimpl
     def sph_summary(self, ctx):
@@ -154,8 +198,6 @@ class VtuWriter(ScheduledWriter):
 
     def write_frame(self, ctx) -> Path:
         """Write the current state as the next frame and rewrite the collection; returns the .vtu."""
-        import meshio
-
         if ctx.output_dir is None:
             raise OutputError("vtu: this run has no output directory")
         out = Path(ctx.output_dir)
@@ -168,13 +210,14 @@ class VtuWriter(ScheduledWriter):
             raise OutputError(f"{path.parent}: cannot create directory: {err.strerror or err}") from err
         walls = getattr(ctx.case, "faces", None)
         if walls is not None and walls.count and not (out / f"{name}_walls.vtu").exists():
+            import meshio
+
             wmesh = walls_mesh(walls)
             replace_atomically(out / f"{name}_walls.vtu",
                                lambda tmp: meshio.write(tmp, wmesh, file_format="vtu", binary=True))
-        mesh = frame_mesh(ctx.state)
         # binary: base64 of the raw float64 bytes, so the file holds exact values
-        replace_atomically(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu", binary=True,
-                                                          compression=self.compression))
+        text = vtu_text(*frame_arrays(ctx.state), compress=self.compress)
+        replace_atomically(path, lambda tmp: tmp.write_text(text))
         self.frames.append((float(ctx.t), rel))
         text = pvd_text(self.frames)
         replace_atomically(self.pvd_path(ctx), lambda tmp: tmp.write_text(text))
