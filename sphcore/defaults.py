@@ -97,7 +97,8 @@ CORE: dict[str, dict[str, O]] = {
         "sort_every": O(10, "int", doc="reorder particles by cell every N steps (memory locality)", positive=True),
     },
     "parallel": {
-        "threads": O(0, "int", doc="most threads to use; 0: all that numba may use (NUMBA_NUM_THREADS)", min=0),
+        "threads": O(0, "int", doc="most threads to use; 0: as many as numba uses when the run starts "
+                     "(NUMBA_NUM_THREADS, all cores by default)", min=0),
         "adapt": O(True, "bool", doc="time the steps with all, half and one of those threads now and then and "
                    "use the fastest (a shared machine can make more threads slower); the results are the "
                    "same bits for any thread count"),

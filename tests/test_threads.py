@@ -159,3 +159,20 @@ def test_counts_within_the_margin_keep_the_last_choice():
     assert len(tuner.probes) >= 2 and used[-1] == 2 and used.count(1) / len(used) < 0.1
     used = drive(tuner, {2: 0.00100, 1: 0.00090}, 100_000)  # 10 % apart
     assert used[-1] == 1
+
+
+def test_a_restart_may_change_the_thread_settings_and_keeps_the_bits(tmp_path):
+    """parallel.threads and parallel.adapt may differ on --restart (resume.MAY_DIFFER): the
+    result is the same bits for any thread count."""
+    dt = 2.0**-15
+    text = DAM_2D.format(plugins='["reflective", "wall_integral"]').replace("t_end = 0.004", f"t_end = {40 * dt!r}\ndt = {dt!r}")
+    case_dir = write_case(tmp_path / "case", text)
+    full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
+    part = runner.run(case_dir, output=tmp_path / "part", t_end=15 * dt, quiet=True)
+    rest = runner.run(case_dir, output=tmp_path / "part", restart=True, quiet=True,
+                      overrides=["parallel.threads=1", "parallel.adapt=false"])
+    assert full["status"] == part["status"] == rest["status"] == "completed"
+    assert rest["threads"]["counts"] == [1] and rest["steps"] == full["steps"] == 40
+    sa, sb = by_id(full["_sim"].state), by_id(rest["_sim"].state)
+    for name in sa:
+        assert np.array_equal(sa[name], sb[name]), name
