@@ -92,7 +92,10 @@ class WallTerms(NamedTuple):
     active: bool
 
 
-DIM = None  # the spatial dimension: a constant of each compiled twin of the pair loop (see the end)
+# constants of each compiled twin of the pair loop (see the end): the spatial dimension, and
+# whether wall terms are supplied (WallTerms.active)
+DIM = None
+WALLS = None
 
 
 def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
@@ -116,10 +119,11 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     still conserved); sources beyond ``L.shape[0]`` use the identity. ``wall``: see the
     module docstring.
 
-    The pair loop is compiled once per dimension (``_RATES``), the dimension a constant:
-    0.44 -> 0.35-0.36 ms per call of the seed's dam break on one thread, the same bits.
+    The pair loop is compiled once per dimension and for runs with and without wall terms
+    (``_RATES``), each a constant of its build: 0.44 -> 0.35-0.36 ms per call of the seed's
+    dam break on one thread (dimension), -> 0.351-0.357 (wall terms), the same bits.
     """
-    _RATES[src.pos.shape[1]](n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth)
+    _RATES[src.pos.shape[1], bool(wall.active)](n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth)
 
 
 def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
@@ -166,10 +170,10 @@ def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
                             spos, buf[k], rows[k])
     if n_dest >= PARALLEL_MIN:
         for i in prange(n_dest):
-            _finish(i, dim, src, prm, wall, acc, drho, work)
+            _finish(i, dim, WALLS, src, prm, wall, acc, drho, work)
     else:
         for i in range(n_dest):
-            _finish(i, dim, src, prm, wall, acc, drho, work)
+            _finish(i, dim, WALLS, src, prm, wall, acc, drho, work)
 
 
 @njit(cache=True, inline="always")
@@ -226,7 +230,7 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
     dcoef = 2.0 * delta * h * c0
     use_L = prm.kernel_gradient
     n_L = L.shape[0] if use_L else 0
-    walls = wall.active
+    walls = WALLS
     # gravity in scalars: loads from an array inside the loop are repeated after every
     # store to acc/drho/work, which the compiler cannot prove do not alias it
     gv0, gv1, gv2 = gravity[0], gravity[1], gravity[2]
@@ -345,14 +349,14 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
 
 
 @njit(cache=True, inline="always")
-def _finish(i, dim, src, prm, wall, acc, drho, work):
+def _finish(i, dim, walls, src, prm, wall, acc, drho, work):
     """Gravity and the wall completion of particle i, after all pairs."""
     rho, gravity = src.rho, prm.gravity
     a0 = acc[i, 0]
     a1 = acc[i, 1]
     a2 = acc[i, 2] if dim == 3 else 0.0
     dr = drho[i]
-    if wall.active and wall.share[i] > 0.0:
+    if walls and wall.share[i] > 0.0:
         a0, a1, a2, dr = _complete_at_wall(wall, i, dim, src.vel, rho[i], src.p[i], prm.rho_ref, prm.moment_norm,
                                            gravity, a0, a1, a2, dr, work[i, 1], work[i, 2], work[i, 3], work[i, 0])
     gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
@@ -372,8 +376,14 @@ def uniform_acceleration(gravity, acc):
             acc[i, d] = gravity[d]
 
 
-# the pair loop compiled per dimension: DIM a constant in each twin (sphcore.parallel.twin)
-_slab_pairs_2d = njit(cache=True)(twin(_slab_pairs, "_2d", DIM=2))
-_slab_pairs_3d = njit(cache=True)(twin(_slab_pairs, "_3d", DIM=3))
-_RATES = {2: njit(cache=True, parallel=True)(twin(_sph_rates, "_2d", DIM=2, _slab_pairs=_slab_pairs_2d)),
-          3: njit(cache=True, parallel=True)(twin(_sph_rates, "_3d", DIM=3, _slab_pairs=_slab_pairs_3d))}
+# the pair loop compiled per dimension and with or without wall terms: DIM and WALLS are
+# constants in each twin (sphcore.parallel.twin); numba compiles each on its first call
+
+
+def _build(dim: int, walls: bool):
+    name = f"_{dim}d" + ("_walls" if walls else "")
+    pairs = njit(cache=True)(twin(_slab_pairs, name, DIM=dim, WALLS=walls))
+    return njit(cache=True, parallel=True)(twin(_sph_rates, name, DIM=dim, WALLS=walls, _slab_pairs=pairs))
+
+
+_RATES = {(dim, walls): _build(dim, walls) for dim in (2, 3) for walls in (False, True)}

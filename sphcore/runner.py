@@ -211,7 +211,7 @@ def kernels_cached(dim: int = 2) -> bool:
     from . import equations
 
     try:  # where numba itself keeps it (in-tree __pycache__, or the user-wide fallback)
-        places = [Path(equations._RATES[dim]._cache._cache_path)]
+        places = [Path(equations._RATES[dim, False]._cache._cache_path)]
     except AttributeError:  # another numba: look where it caches by default
         places = [Path(equations.__file__).parent / "__pycache__"]
-    return any(any(p.glob(f"equations._sph_rates_{dim}d-*.nbi")) for p in places if p.is_dir())
+    return any(any(p.glob(f"equations._sph_rates_{dim}d*.nbi")) for p in places if p.is_dir())
