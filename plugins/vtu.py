@@ -73,7 +73,7 @@ def _encoded(a: np.ndarray, compress: bool) -> str:
     import base64
     import zlib
 
-    raw = np.ascontiguousarray(a).tobytes()
+    raw = np.ascontiguousarray(a, dtype=a.dtype.newbyteorder("<")).tobytes()  # the file says LittleEndian
     if not compress:
         return base64.b64encode(np.array([len(raw)], "<u8").tobytes() + raw).decode()
     blocks = [zlib.compress(raw[k:k + BLOCK], ZLIB_LEVEL) for k in range(0, len(raw), BLOCK)]
