@@ -127,7 +127,8 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
 
 
 def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
-    """:func:`sph_rates` for one dimension, DIM (compiled as twins: see the end)."""
+    """:func:`sph_rates` for one dimension DIM, with or without wall terms (WALLS); compiled
+    as twins (see the end)."""
     dim = DIM
     n_src = src.rho.shape[0]
     # element-wise passes: a parallel launch costs more than the work below PARALLEL_MIN

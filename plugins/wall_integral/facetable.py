@@ -26,8 +26,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from .facewalls import _add_terms, _set_projector, point_terms
-from .normals import _add_direction
+from .facewalls import _add_terms, point_terms
+from .normals import _add_direction, set_projector
 
 GRID_SHIFT = 0.381966  # (3 - sqrt 5) / 2 of a spacing
 NV = 14  # per node: s, G (3), T g (3), the faces' projector (00 01 02 11 12 22), faces within 2h (0 or 1)
@@ -159,4 +159,4 @@ def table_wall_terms(pos, lo, inv, shape, tab, full, share, grad, hydro, fill, q
             c1 = near[8] if a == 0 else (near[10] if a == 1 else near[11])
             c2 = near[9] if a == 0 else (near[11] if a == 1 else near[12])
             basis, count = _add_direction(basis, count, dim, c0, c1, c2)
-        _set_projector(q[i], dim, basis, count)
+        set_projector(q[i], dim, basis, count)

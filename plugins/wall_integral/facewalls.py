@@ -24,7 +24,7 @@ from numba import njit, prange
 from sphcore.api import box_cells, nearest_point
 
 from .meshfaces import face_part
-from .normals import _add_direction
+from .normals import _add_direction, set_projector
 from .share import add_face, add_terms_to
 
 
@@ -50,7 +50,7 @@ def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, epoch
             if near == 0:
                 continue
             _add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill)
-            _set_projector(q[i], dim, basis, count)
+            set_projector(q[i], dim, basis, count)
 
 
 @njit(cache=True, inline="always")
@@ -59,17 +59,6 @@ def _add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, f
     add_terms_to(i, dim, s, gr0, gr1, gr2, t0, t1, t2, share, grad, hydro)
     ref = fill[i] if fill[i] > 0.0 else full
     fill[i] = max(ref - s, 1e-3 * full)
-
-
-@njit(cache=True, inline="always")
-def _set_projector(qi, dim, basis, count):
-    """qi (dim, dim) <- the projector onto the span of the first ``count`` rows of ``basis``."""
-    for a in range(dim):
-        for bb in range(dim):
-            acc = 0.0
-            for k in range(count):
-                acc += basis[3 * k + a] * basis[3 * k + bb]
-            qi[a, bb] = acc
 
 
 @njit(cache=True)

@@ -57,9 +57,16 @@ def project_one(i, pos, normals, offsets, support, q):
         if particle_distance(normals, offsets, k, pos, i) < support:
             basis, count = _add_direction(basis, count, dim, normals[k, 0], normals[k, 1],
                                           normals[k, 2] if dim == 3 else 0.0)
+    set_projector(q[i], dim, basis, count)
+
+
+@njit(cache=True, inline="always")
+def set_projector(qi, dim, basis, count):
+    """qi (dim, dim) <- the projector onto the span of the first ``count`` rows of ``basis``
+    (orthonormal rows of 3, from :func:`_add_direction`)."""
     for a in range(dim):
         for b in range(dim):
-            s = 0.0
+            acc = 0.0
             for c in range(count):
-                s += basis[3 * c + a] * basis[3 * c + b]
-            q[i, a, b] = s
+                acc += basis[3 * c + a] * basis[3 * c + b]
+            qi[a, b] = acc
