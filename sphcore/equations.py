@@ -51,7 +51,7 @@ from .neighbours import candidates_bound, forward_pairs, forward_rows, separatio
 from .parallel import PARALLEL_MIN, twin
 from .wall_completion import _complete_at_wall
 
-PAIRS_PARALLEL_MIN = 2048  # particles: the pair loop runs serial below (one thread is faster)
+PAIRS_PARALLEL_MIN = 1000  # particles: the pair loop runs serial below (one thread is faster)
 WORK_COLUMNS = 9  # per-source scratch of sph_rates: see its docstring
 
 
@@ -152,9 +152,11 @@ def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     # (which cost no measurable time: 0.31 ms a call of the seed's dam break on two threads
     # either way). Which thread runs a slab does not change the result. Below
     # PAIRS_PARALLEL_MIN particles the two launches per call cost more than the
-    # second thread saves (measured: 1,024 particles 0.32 us per particle-step on one
-    # thread, 0.37 on two); the serial loop visits the slabs in the same phases, so the
-    # additions to each particle come in the same order: the same bits.
+    # second thread saves (2D still water, two threads, with the spin of
+    # sphcore/__init__.py: 1,024 particles 0.185-0.191 us per particle-step with this loop
+    # serial, 0.155-0.208, median 0.165, parallel; 529 particles 0.211 serial and
+    # 0.212-0.220 parallel with a longer spin); the serial loop visits the slabs in the
+    # same phases, so the additions to each particle come in the same order: the same bits.
     for phase in range(2):
         ntask = (nslab - phase + 1) // 2
         if n_src < PAIRS_PARALLEL_MIN:

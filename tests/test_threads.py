@@ -176,3 +176,19 @@ def test_a_restart_may_change_the_thread_settings_and_keeps_the_bits(tmp_path):
     sa, sb = by_id(full["_sim"].state), by_id(rest["_sim"].state)
     for name in sa:
         assert np.array_equal(sa[name], sb[name]), name
+
+
+@pytest.mark.parametrize("given", [None, "0", "passive"])
+def test_openmp_wait_defaults_are_set_at_import_and_a_users_setting_wins(given):
+    """sphcore sets a passive wait with a short spin (sphcore/__init__.py) before numba
+    starts its threads, unless the user set them."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("GOMP_SPINCOUNT", "OMP_WAIT_POLICY")}
+    if given is not None:
+        env["GOMP_SPINCOUNT"] = env["OMP_WAIT_POLICY"] = given
+    out = subprocess.run([sys.executable, "-c", "import os, sphcore; print(os.environ['GOMP_SPINCOUNT'], "
+                          "os.environ['OMP_WAIT_POLICY'])"], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ([given, given] if given else ["1000", "passive"])
