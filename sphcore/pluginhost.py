@@ -19,7 +19,7 @@ from importlib.metadata import entry_points
 
 import pluggy
 
-from . import hookspecs
+from . import defaults, hookspecs
 from .errors import CaseError
 
 GROUP = "sphcore"
@@ -95,60 +95,93 @@ def _inspect(name, value, dist, version, load) -> PluginInfo:
 
 
 @functools.lru_cache(maxsize=1)
-def available() -> dict[str, PluginInfo]:
-    """Every plugin installed under the entry-point group, by name (loaded and checked once)."""
+def _entry_points() -> dict:
+    """The entry points of the group by name, read once (nothing imported)."""
     out = {}
     for ep in entry_points(group=GROUP):
-        if ep.name in out:
-            continue  # the first distribution on sys.path wins, as for any entry point
-        dist = ep.dist.name if ep.dist else "?"
-        version = ep.dist.version if ep.dist else "?"
-        out[ep.name] = _inspect(ep.name, ep.value, dist, version, ep.load)
+        out.setdefault(ep.name, ep)  # the first distribution on sys.path wins, as for any entry point
     return out
+
+
+@functools.lru_cache(maxsize=None)
+def info(name: str) -> PluginInfo | None:
+    """One installed plugin, loaded and checked on first use (None: not installed)."""
+    ep = _entry_points().get(name)
+    if ep is None:
+        return None
+    dist = ep.dist.name if ep.dist else "?"
+    version = ep.dist.version if ep.dist else "?"
+    return _inspect(ep.name, ep.value, dist, version, ep.load)
+
+
+def available() -> dict[str, PluginInfo]:
+    """Every plugin installed under the entry-point group, by name (each loaded and checked once)."""
+    return {name: info(name) for name in _entry_points()}
 
 
 def refresh() -> None:
     """Forget the cached entry points (after installing a plugin in the same process)."""
-    available.cache_clear()
+    _entry_points.cache_clear()
+    info.cache_clear()
 
 
 def make_manager(names, file="case.toml") -> pluggy.PluginManager:
     """A manager with one new instance of each named plugin; unknown names are CaseErrors,
     broken plugins PluginLoadErrors naming the plugin and its distribution."""
-    plugins = available()
     pm = _manager()
     for name in names:
-        if name not in plugins:
-            raise CaseError(file, "plugins.use", f"unknown plugin {name!r} (installed: {', '.join(sorted(plugins)) or 'none'})")
+        plugin = info(name)
+        if plugin is None:
+            installed = ", ".join(sorted(_entry_points())) or "none"
+            raise CaseError(file, "plugins.use", f"unknown plugin {name!r} (installed: {installed})")
         if pm.get_plugin(name) is not None:
             raise CaseError(file, "plugins.use", f"plugin {name!r} is listed twice")
-        info = plugins[name]
-        if info.error:
-            info.fail()
-        pm.register(info.cls(), name=name)
+        if plugin.error:
+            plugin.fail()
+        pm.register(plugin.cls(), name=name)
     return pm
 
 
-def option_schemas(file="case.toml", sections=()) -> dict:
-    """The case tables every usable installed plugin declares: {table: {key: Option}}.
+def option_schemas(file="case.toml", sections=None) -> dict:
+    """The case tables that installed plugins declare: {table: {key: Option}}.
 
-    Tables of installed but unselected plugins are validated too, so switching plugins is
-    one change to ``plugins.use``. A section of ``sections`` (the case's) that belongs to a
-    broken plugin raises that plugin's error instead of "unknown section".
+    ``sections``: the case (its raw tables); None: every installed plugin's tables. For a
+    case, the plugins it uses and those named like one of its tables are loaded; a table
+    that neither the core nor they own loads every installed plugin to find its owner, so
+    the tables of installed but unselected plugins are validated too (switching plugins is
+    one change to ``plugins.use``) while a run imports only what it may need (loading all
+    nine built-in plugins cost ~40 ms of every run's start). A table of ``sections`` that
+    belongs to a broken plugin raises that plugin's error instead of "unknown section".
     """
+    if sections is None:
+        plugins = available()
+    else:
+        names = set(_entry_points())
+        wanted = (set(sections) | set(_uses(sections))) & names
+        plugins = {name: info(name) for name in wanted}
+        owned = set(defaults.CORE).union(*[p.tables or () for p in plugins.values()])
+        if not set(sections) <= owned:
+            plugins = available()
     schemas, owner = {}, {}
-    for name, info in sorted(available().items()):
-        tables = info.tables
-        if info.error:
+    for name, plugin in sorted(plugins.items()):
+        tables = plugin.tables
+        if plugin.error:
             known = set(tables or ()) | {name}
-            if known & set(sections):
-                info.fail()
+            if known & set(sections or ()):
+                plugin.fail()
             continue
         for table, schema in (tables or {}).items():
             if table in schemas:
-                raise PluginLoadError(f"{info.label} declares table [{table}] which plugin {owner[table]!r} owns")
+                raise PluginLoadError(f"{plugin.label} declares table [{table}] which plugin {owner[table]!r} owns")
             schemas[table], owner[table] = schema, name
     return schemas
+
+
+def _uses(raw) -> list:
+    """The plugin names of a raw case's plugins.use, as far as they are strings (the
+    validation reports the rest)."""
+    use = raw.get("plugins", {}).get("use") if isinstance(raw.get("plugins"), dict) else None
+    return [u for u in use if isinstance(u, str)] if isinstance(use, list) else []
 
 
 def configure(pm, case) -> None:
@@ -160,8 +193,8 @@ def configure(pm, case) -> None:
         except CaseError:
             raise
         except Exception as e:
-            info = available().get(impl.plugin_name)
-            label = info.label if info else f"plugin {impl.plugin_name!r}"
+            plugin = info(impl.plugin_name)
+            label = plugin.label if plugin else f"plugin {impl.plugin_name!r}"
             raise PluginLoadError(f"{label} failed in sph_configure: {_one_line(e)}") from e
 
 

@@ -330,3 +330,26 @@ def test_summary_of_a_crashed_run_does_not_say_completed(throwaway, tmp_path):
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["t"] == pytest.approx(0.03)
     assert summary["status"] != "completed"
+
+
+def test_a_run_imports_only_the_plugins_its_case_may_need(tmp_path):
+    """runner.load imports the case's plugins and those named like its tables, not every
+    installed one (start-up time); run in a fresh process so that nothing is imported yet."""
+    import subprocess
+
+    case_dir = write_case(tmp_path / "c", plugins=["reflective"], tables={"vtu": {"every_dt": 0.1}})
+    code = ("import sys; from sphcore import runner; runner.load(sys.argv[1]); "
+            "print(' '.join(sorted(m for m in sys.modules if m.startswith('sphcore_plugins.') and m.count('.') == 1)))")
+    out = subprocess.run([sys.executable, "-c", code, str(case_dir)], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["sphcore_plugins.reflective", "sphcore_plugins.vtu"]
+
+
+def test_an_unselected_plugins_table_is_still_validated(tmp_path):
+    """A table no loaded plugin owns loads every installed plugin to find its owner: a bad
+    key in an unselected plugin's table is refused, an unknown table lists every known one."""
+    case_dir = write_case(tmp_path / "c", plugins=["reflective"], tables={"probes": {"evry_dt": 0.1}})
+    with pytest.raises(CaseError, match="evry_dt"):
+        runner.load(case_dir)
+    case_dir = write_case(tmp_path / "d", plugins=["reflective"], tables={"probez": {"every_dt": 0.1}})
+    with pytest.raises(CaseError, match=r"unknown section \(known: .*probes.*vtu"):
+        runner.load(case_dir)
