@@ -1,15 +1,17 @@
 """Instability detection after a step: non-finite values, density out of bounds, particles
-outside the walls. One serial pass (cheap next to the force kernel) that returns the worst
-offender, so the message can name it."""
+outside the walls. One pass (cheap next to the force kernel; parallel for large runs) that
+returns the worst offender, so the message can name it."""
 
 from __future__ import annotations
 
 import math
 
-from numba import njit
+import numpy as np
+from numba import njit, prange
 
 from .eos import energy_potential, tait_b
 from .geometry import plane_distance
+from .parallel import by_size
 
 OK, NONFINITE, RHO_LOW, RHO_HIGH, OUTSIDE = 0, 1, 2, 3, 4
 REASONS = {
@@ -20,19 +22,53 @@ REASONS = {
 }
 
 
-@njit(cache=True)
+CHUNKS = 16  # contiguous ranges of particles, scanned alone (maybe in parallel), then combined in order
+
+
+@by_size
 def scan(pos, vel, rho, rho_lo, rho_hi, check_rho, normals, offsets):
-    """(code, index, value) of the worst problem; code OK when there is none."""
-    n, dim = pos.shape
-    worst_lo, i_lo = rho_lo, -1
-    worst_hi, i_hi = rho_hi, -1
-    worst_out, i_out = 0.0, -1
-    for i in range(n):
+    """(code, index, value) of the worst problem; code OK when there is none. The particles
+    are scanned in CHUNKS ranges (in parallel from PARALLEL_MIN particles,
+    :class:`sphcore.parallel.by_size`), combined in order so that the answer is the serial
+    scan's: the first non-finite particle, else the one farthest outside, else the lowest
+    or highest density, the first of equals."""
+    n = pos.shape[0]
+    index = np.full((CHUNKS, 4), -1, np.int64)  # per chunk: non-finite, outside, low, high
+    value = np.empty((CHUNKS, 4))
+    for k in prange(CHUNKS):
+        _scan_range(k * n // CHUNKS, (k + 1) * n // CHUNKS, pos, vel, rho, rho_lo, rho_hi, check_rho, normals,
+                    offsets, index[k], value[k])
+    worst = np.array([0.0, 0.0, rho_lo, rho_hi])
+    found = np.full(4, -1, np.int64)
+    for k in range(CHUNKS):
+        if index[k, 0] >= 0:
+            return NONFINITE, index[k, 0], value[k, 0]
+        for c in range(1, 4):
+            better = value[k, c] > worst[c] if c == 3 else value[k, c] < worst[c]
+            if index[k, c] >= 0 and better:
+                worst[c], found[c] = value[k, c], index[k, c]
+    for c, code in ((1, OUTSIDE), (2, RHO_LOW), (3, RHO_HIGH)):
+        if found[c] >= 0:
+            return code, found[c], worst[c]
+    return OK, -1, 0.0
+
+
+@njit(cache=True)
+def _scan_range(first, end, pos, vel, rho, rho_lo, rho_hi, check_rho, normals, offsets, index, value):
+    """Scan particles first <= i < end into index / value (see :func:`scan`): the first
+    non-finite one (and stop), the farthest outside a wall plane, the lowest density below
+    rho_lo and the highest above rho_hi (-1: none)."""
+    dim = pos.shape[1]
+    worst_lo, worst_hi, worst_out = rho_lo, rho_hi, 0.0
+    i_lo, i_hi, i_out = -1, -1, -1
+    for i in range(first, end):
         s = rho[i]
         for d in range(dim):
             s += pos[i, d] + vel[i, d]
         if not math.isfinite(s):
-            return NONFINITE, i, s
+            index[0] = i
+            value[0] = s
+            return
         if check_rho:
             if rho[i] < worst_lo:
                 worst_lo, i_lo = rho[i], i
@@ -44,13 +80,8 @@ def scan(pos, vel, rho, rho_lo, rho_hi, check_rho, normals, offsets):
             dist = plane_distance(normals, offsets, k, x0, x1, x2)
             if dist < worst_out:
                 worst_out, i_out = dist, i
-    if i_out >= 0:
-        return OUTSIDE, i_out, worst_out
-    if i_lo >= 0:
-        return RHO_LOW, i_lo, worst_lo
-    if i_hi >= 0:
-        return RHO_HIGH, i_hi, worst_hi
-    return OK, -1, 0.0
+    index[1], index[2], index[3] = i_out, i_lo, i_hi
+    value[1], value[2], value[3] = worst_out, worst_lo, worst_hi
 
 
 @njit(cache=True)

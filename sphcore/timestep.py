@@ -15,23 +15,39 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+import numpy as np
+from numba import prange
+
+from .parallel import by_size
 
 
-@njit(cache=True)
+CHUNKS = 16  # contiguous ranges of particles, each reduced alone, then in order
+
+
+@by_size
 def max_norms(vel, acc):
-    """Largest |v| (m/s) and |a| (m/s^2) over the particles (serial: no allocation)."""
+    """Largest |v| (m/s) and |a| (m/s^2) over the particles, in CHUNKS ranges that may run
+    in parallel (:class:`sphcore.parallel.by_size`; a maximum does not depend on the order)."""
     n, dim = vel.shape
+    part = np.zeros((CHUNKS, 2))
+    for k in prange(CHUNKS):
+        vm = 0.0
+        am = 0.0
+        for i in range(k * n // CHUNKS, (k + 1) * n // CHUNKS):
+            sv = 0.0
+            sa = 0.0
+            for d in range(dim):
+                sv += vel[i, d] * vel[i, d]
+                sa += acc[i, d] * acc[i, d]
+            vm = max(vm, sv)
+            am = max(am, sa)
+        part[k, 0] = vm
+        part[k, 1] = am
     vm = 0.0
     am = 0.0
-    for i in range(n):
-        sv = 0.0
-        sa = 0.0
-        for d in range(dim):
-            sv += vel[i, d] * vel[i, d]
-            sa += acc[i, d] * acc[i, d]
-        vm = max(vm, sv)
-        am = max(am, sa)
+    for k in range(CHUNKS):
+        vm = max(vm, part[k, 0])
+        am = max(am, part[k, 1])
     return math.sqrt(vm), math.sqrt(am)
 
 
