@@ -176,7 +176,8 @@ class VtuWriter(ScheduledWriter):
     def sph_options(self):
         return {TABLE: {**super().sph_options()[TABLE], "compress": Option(
             True, "bool", doc="zlib-compress each frame's arrays (level 1): about half the file size, a few times "
-            "the write time (docs/speed.md)")}}
+            "the write time (docs/speed.md); may change on --restart (each frame says how it is written)",
+            restart=True)}}
 
     @hookimpl
     def sph_configure(self, case):

@@ -38,6 +38,7 @@ class Case:
     planes: Planes
     blocks: list = field(default_factory=list)
     faces: Faces | None = None  # finite walls ([[domain.walls]]); None or empty without
+    restart_keys: frozenset = frozenset()  # "table.key" of plugin options that may change on --restart
 
     def __post_init__(self):
         if self.faces is None:
@@ -242,8 +243,10 @@ def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
     tank = any(sign < 0 for _, _, sign in faces.groups)
     planes = _planes(file, cfg, dim, bounded_by_walls=tank)
     blocks = _blocks(file, cfg, dim)
+    restart_keys = frozenset(f"{table}.{key}" for table, schema in plugin_schemas.items()
+                             for key, opt in schema.items() if opt.restart)
     return Case(file=Path(file), dir=Path(file).parent, config=cfg, planes=planes, blocks=blocks,
-                faces=faces)
+                faces=faces, restart_keys=restart_keys)
 
 
 def case_file(case_dir) -> Path:

@@ -37,6 +37,8 @@ def sph_options():
     Fires while the case is loaded, before validation. Return
     ``{table_name: {key: sphcore.options.Option}}``; the host validates the case's tables
     against it (unknown key, wrong type are errors naming file and key) and fills defaults.
+    An option declared with ``restart=True`` may change on ``--restart`` (it changes how
+    the run reports, not what it computes); any other change of the case is refused there.
     """
 
 

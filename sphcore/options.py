@@ -29,6 +29,7 @@ class Option:
     choices: tuple = ()  # allowed strings
     nullable: bool = False  # the default None means "derived" (e.g. radius = dx/2)
     extra: dict = field(default_factory=dict)
+    restart: bool = False  # may change on --restart: how the run reports, not what it computes
 
     def describe(self) -> str:
         bits = [self.doc]

@@ -2,7 +2,7 @@
 ``--restart`` to continue it, and the run's history across segments (for the summary).
 
 A restart continues the same run only: the case after ``--set`` (except the keys in
-:data:`MAY_DIFFER`), the sphcore version, the case file and the output directory must be
+:data:`MAY_DIFFER` and plugin options declared with ``Option(restart=True)``), the sphcore version, the case file and the output directory must be
 those recorded in the checkpoint. Otherwise frames of another run would be appended to the
 same files; the restart is refused (exit status 2) with what differs.
 """
@@ -16,7 +16,8 @@ from pathlib import Path
 from . import __version__
 from .errors import CaseError
 
-#: keys a restart may change: how far to run, and how the run reports and checkpoints
+#: core keys a restart may change: how far to run, and how the run reports and checkpoints
+#: (a plugin marks its own with ``Option(restart=True)``)
 MAY_DIFFER = {"time.t_end", "output.progress", "output.log_interval_s", "output.checkpoint_every_s",
               "output.checkpoint_every_dt", "output.dir", "particles.memory_limit_gib", "time.max_steps",
               "parallel.threads", "parallel.adapt"}  # the same bits for any thread count
@@ -82,8 +83,9 @@ def verify(meta: dict, case, out: Path, file) -> None:
     # between), does not change the run
     used = set(case.config["plugins"]["use"])
     one_sided = ({k.split(".")[0] for k in old} ^ {k.split(".")[0] for k in new}) - used
+    may_differ = MAY_DIFFER | getattr(case, "restart_keys", frozenset())
     diff = [k for k in sorted(set(old) | set(new))
-            if k not in MAY_DIFFER and k.split(".")[0] not in one_sided and old.get(k) != new.get(k)]
+            if k not in may_differ and k.split(".")[0] not in one_sided and old.get(k) != new.get(k)]
     if diff:
         shown = "; ".join(f"{k} = {old.get(k, '(unset)')!r} in the checkpoint, {new.get(k, '(unset)')!r} now"
                           for k in diff[:3])

@@ -387,3 +387,28 @@ def test_restart_ignores_tables_of_plugins_the_run_does_not_use():
     changed = {**cfg, "vtu": {"every_dt": 0.02}}
     with pytest.raises(sphcore.errors.CaseError, match="vtu.every_dt = 0.01 in the checkpoint, 0.02 now"):
         resume.verify(meta, SimpleNamespace(config=changed, file=Path("case.toml")), Path("out"), "checkpoint.npz")
+
+
+def test_restart_accepts_a_change_of_a_plugin_option_declared_restart_true():
+    """Option(restart=True) (vtu.compress) may change on --restart; other plugin keys may not."""
+    from types import SimpleNamespace
+
+    from sphcore import resume
+
+    cfg = {"time": {"t_end": 1.0}, "plugins": {"use": ["vtu"]}, "vtu": {"every_dt": 0.01, "compress": True}}
+    meta = {"version": sphcore.__version__, "config": resume.config_json(cfg)}
+    keys = frozenset({"vtu.compress"})
+    changed = {**cfg, "vtu": {"every_dt": 0.01, "compress": False}}
+    resume.verify(meta, SimpleNamespace(config=changed, file=Path("case.toml"), restart_keys=keys), Path("out"),
+                  "checkpoint.npz")
+    with pytest.raises(sphcore.errors.CaseError, match="vtu.compress"):
+        resume.verify(meta, SimpleNamespace(config=changed, file=Path("case.toml")), Path("out"), "checkpoint.npz")
+
+
+def test_the_vtu_writers_compress_option_may_change_on_restart(tmp_path):
+    """End to end: the case's restart_keys come from the plugins' Option(restart=True)."""
+    from sphcore import runner
+
+    case_dir = write_case(tmp_path / "c", plugins=["reflective", "vtu"])
+    case, _ = runner.load(case_dir)
+    assert "vtu.compress" in case.restart_keys and "vtu.every_dt" not in case.restart_keys
