@@ -8,44 +8,68 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .parallel import serial_and_parallel
+from .parallel import PARALLEL_MIN, serial_and_parallel
 
 MAX_AXIS_CELLS = 1 << 21  # cells per axis; the keys of three axes then fit in an int64
 MAX_SLABS = 64  # slabs of the pair loop (two phases of up to 32 parallel tasks)
 
 
-@njit(cache=True)
-def bounding_box(pos):
-    """Lower and upper corner (3,) of the points; z is 0 in 2D; NaN where a coordinate is."""
+BOX_CHUNKS = 16  # ranges of particles whose boxes are found alone (maybe in parallel), then merged
+
+
+def _bounding_box(pos):
+    """Lower and upper corner (3,) of the points; z is 0 in 2D; NaN where a coordinate is.
+    Over BOX_CHUNKS ranges of particles, merged in order (a minimum and a maximum do not
+    depend on the order; a NaN in any range makes that lower corner NaN)."""
     n, dim = pos.shape
+    part = np.empty((BOX_CHUNKS, 2, 3))
+    for ch in prange(BOX_CHUNKS):
+        lo = np.zeros(3)
+        hi = np.zeros(3)
+        for d in range(dim):
+            lo[d] = np.inf
+            hi[d] = -np.inf
+        for i in range(ch * n // BOX_CHUNKS, (ch + 1) * n // BOX_CHUNKS):
+            for d in range(dim):
+                x = pos[i, d]
+                if x < lo[d]:
+                    lo[d] = x
+                if x > hi[d]:
+                    hi[d] = x
+                if x != x:  # NaN: the box becomes NaN too (and stays: comparisons are false)
+                    lo[d] = x
+        for d in range(3):
+            part[ch, 0, d] = lo[d]
+            part[ch, 1, d] = hi[d]
     lo = np.zeros(3)
     hi = np.zeros(3)
     for d in range(dim):
         lo[d] = np.inf
         hi[d] = -np.inf
-    for i in range(n):
-        for d in range(dim):
-            x = pos[i, d]
-            if x < lo[d]:
+        for ch in range(BOX_CHUNKS):
+            x = part[ch, 0, d]
+            if x < lo[d] or x != x:
                 lo[d] = x
-            if x > hi[d]:
-                hi[d] = x
-            if x != x:  # NaN: the box becomes NaN too (and stays: comparisons are false)
-                lo[d] = x
+            hi[d] = max(hi[d], part[ch, 1, d])
     return lo, hi
 
 
-@njit(cache=True)
 def _keys(pos, lo, cell_size, axes, ncell, key):
     """key[i] = mixed-radix cell index, axes[0] (major) most significant."""
     n, dim = pos.shape
-    for i in range(n):
+    for i in prange(n):
         k = 0
         for a in range(dim):
             ax = axes[a]
             c = min(int((pos[i, ax] - lo[ax]) / cell_size), ncell[a] - 1)
             k = k * ncell[a] + c
         key[i] = k
+
+
+# serial and parallel builds (the same results: sphcore.parallel.serial_and_parallel); the
+# build below takes the parallel ones from PARALLEL_MIN particles
+_box_serial, _box_parallel = serial_and_parallel(_bounding_box)
+_keys_serial, _keys_parallel = serial_and_parallel(_keys)
 
 
 @njit(cache=True)
@@ -197,7 +221,8 @@ def _build(pos, cell_size, reach, lo, ncell, axes, key, order, tmp, count, pcell
     (-1, axis cells) when the particles spread over MAX_AXIS_CELLS or more cells along an
     axis, (-2, 0) for non-finite positions. ``lo`` (3,), ``ncell`` and ``axes`` (dim,) out."""
     n, dim = pos.shape
-    box_lo, box_hi = bounding_box(pos)
+    parallel = n >= PARALLEL_MIN
+    box_lo, box_hi = _box_parallel(pos) if parallel else _box_serial(pos)
     cells = np.ones(3, np.int64)
     for d in range(dim):
         if n == 0:
@@ -224,7 +249,10 @@ def _build(pos, cell_size, reach, lo, ncell, axes, key, order, tmp, count, pcell
         while (1 << b) < ncell[a]:
             b += 1
         nbits += b
-    _keys(pos, lo, cell_size, axes, ncell, key)
+    if parallel:
+        _keys_parallel(pos, lo, cell_size, axes, ncell, key)
+    else:
+        _keys_serial(pos, lo, cell_size, axes, ncell, key)
     _radix_sort(key, nbits, order, tmp, count)
     if n == 0:
         cell_start[0] = 0

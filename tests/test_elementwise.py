@@ -94,3 +94,26 @@ def test_integrator_updates_give_the_same_bits_in_both_builds():
         assert np.array_equal(a, b)
     assert np.array_equal(out["serial"][0], pos)
     assert np.allclose(out["serial"][1], pos + 1e-3 * (vel + 0.5e-3 * acc), rtol=0, atol=1e-15)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 80), st.sampled_from([2, 3]), st.integers(0, 2**32 - 1), st.integers(-1, 80))
+def test_the_cell_grids_bounding_box_is_numpys_in_both_builds(n, dim, seed, nan_at):
+    """Lower and upper corners of the particles in both builds of the grid's box (16 ranges
+    merged); a NaN coordinate makes the lower corner NaN on that axis."""
+    from sphcore import cellkeys
+
+    pos = np.random.default_rng(seed).normal(size=(n, dim))
+    if 0 <= nan_at < n:
+        pos[nan_at, nan_at % dim] = np.nan
+    for build in (cellkeys._box_serial, cellkeys._box_parallel):
+        lo, hi = build(pos)
+        for d in range(dim):
+            column = pos[:, d]
+            if np.isnan(column).any():
+                assert np.isnan(lo[d])
+            else:
+                assert lo[d] == (column.min() if n else np.inf)
+            finite = column[~np.isnan(column)]
+            assert hi[d] == (finite.max() if finite.size else -np.inf)
+        assert not lo[dim:].any() and not hi[dim:].any()
