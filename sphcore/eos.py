@@ -13,7 +13,9 @@ plugin, the energy check, the wall model).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+from .parallel import by_size
 
 #: the base (p - p_b)/B + 1 of the inverse is clamped here so a density stays positive
 #: (>= 0.37 rho0 for gamma = 7) under strong tension
@@ -60,11 +62,12 @@ def internal_energy(rho, rho0, b, gamma):
     return energy_potential(rho, rho0, b, gamma) - energy_potential(rho0, rho0, b, gamma)
 
 
-@njit(cache=True)
+@by_size
 def fill_pressure(rho, rho0, c0, gamma, p_background, p):
-    """p[i] = p(rho[i]) for every particle (element-wise: serial, see integrators)."""
+    """p[i] = p(rho[i]) for every particle (element-wise; parallel from PARALLEL_MIN
+    particles, :class:`sphcore.parallel.by_size`: the same bits either way)."""
     b = tait_b(c0, rho0, gamma)
-    for i in range(rho.shape[0]):
+    for i in prange(rho.shape[0]):
         p[i] = pressure(rho[i], rho0, b, gamma, p_background)
 
 

@@ -117,3 +117,15 @@ def test_the_cell_grids_bounding_box_is_numpys_in_both_builds(n, dim, seed, nan_
             finite = column[~np.isnan(column)]
             assert hi[d] == (finite.max() if finite.size else -np.inf)
         assert not lo[dim:].any() and not hi[dim:].any()
+
+
+def test_the_equation_of_state_gives_the_same_bits_in_both_builds():
+    from sphcore import eos
+
+    rho = np.random.default_rng(3).uniform(950.0, 1050.0, 30_000)
+    p_serial, p_parallel = np.empty_like(rho), np.empty_like(rho)
+    eos.fill_pressure.serial(rho, 1000.0, 30.0, 7.0, 0.0, p_serial)
+    eos.fill_pressure.parallel(rho, 1000.0, 30.0, 7.0, 0.0, p_parallel)
+    assert np.array_equal(p_serial, p_parallel)
+    b = 30.0**2 * 1000.0 / 7.0
+    assert np.allclose(p_serial, b * ((rho / 1000.0) ** 7 - 1.0), rtol=1e-12, atol=1e-9)
