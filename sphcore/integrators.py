@@ -34,32 +34,30 @@ from .parallel import by_size
 
 
 @by_size
-def _drift(pos0, pos, vel, acc, dt, half_kick):
-    """pos0 <- pos; pos += dt (vel + half_kick * dt/2 * acc)."""
+def _drift_kick(pos0, pos, vel, acc, rho, drho, dt, half_kick, evolve_density):
+    """pos0 <- pos; pos += dt (vel + half_kick * dt/2 * acc); vel += dt * acc; and with
+    ``evolve_density`` rho += dt * drho. One pass over the particles."""
     n, dim = pos.shape
     for i in prange(n):
         for d in range(dim):
             x = pos[i, d]
+            v = vel[i, d]
             pos0[i, d] = x
-            pos[i, d] = x + dt * (vel[i, d] + half_kick * 0.5 * dt * acc[i, d])
+            pos[i, d] = x + dt * (v + half_kick * 0.5 * dt * acc[i, d])
+            vel[i, d] = v + dt * acc[i, d]
+        if evolve_density:
+            rho[i] += dt * drho[i]
 
 
 @by_size
-def _kick(vel, acc, dt):
-    """vel += dt * acc (also used on 1-column density arrays through a 2D view)."""
-    n, dim = vel.shape
-    for i in prange(n):
-        for d in range(dim):
-            vel[i, d] += dt * acc[i, d]
-
-
-@by_size
-def _correct(vel, acc_new, acc_old, half_dt):
-    """vel += half_dt * (acc_new - acc_old)."""
+def _correct(vel, acc_new, acc_old, rho, drho_new, drho_old, half_dt, evolve_density):
+    """vel += half_dt * (acc_new - acc_old); with ``evolve_density`` the same for rho."""
     n, dim = vel.shape
     for i in prange(n):
         for d in range(dim):
             vel[i, d] += half_dt * (acc_new[i, d] - acc_old[i, d])
+        if evolve_density:
+            rho[i] += half_dt * (drho_new[i] - drho_old[i])
 
 
 class _Scheme:
@@ -135,10 +133,7 @@ class _Scheme:
         """x += dt (v + half_kick dt/2 a), v += dt a, rho += dt D; then walls and EOS."""
         st = self.state
         self.rates()
-        _drift(self.pos0, st.pos, st.vel, self.acc, dt, self.half_kick)
-        _kick(st.vel, self.acc, dt)
-        if self.evolves_density:
-            _kick(st.rho.reshape(-1, 1), self.drho.reshape(-1, 1), dt)
+        _drift_kick(self.pos0, st.pos, st.vel, self.acc, st.rho, self.drho, dt, self.half_kick, self.evolves_density)
         self.after_drift(self.pos0, st.pos, st.vel, self.acc, dt)
         self.eos()
 
@@ -166,13 +161,14 @@ class Leapfrog(_Scheme):
     def step(self, dt):
         st = self.state
         self.free_motion(dt)
-        self.acc_old[:] = self.acc
+        # the rates of the step's start become the old ones by swapping the arrays (the
+        # evaluation overwrites every row), not by copying them
+        self.acc, self.acc_old = self.acc_old, self.acc
         if self.evolves_density:
-            self.drho_old[:] = self.drho
+            self.drho, self.drho_old = self.drho_old, self.drho
         self.forces.evaluate(self.acc, self.drho)
-        _correct(st.vel, self.acc, self.acc_old, 0.5 * dt)
+        _correct(st.vel, self.acc, self.acc_old, st.rho, self.drho, self.drho_old, 0.5 * dt, self.evolves_density)
         if self.evolves_density:
-            _correct(st.rho.reshape(-1, 1), self.drho.reshape(-1, 1), self.drho_old.reshape(-1, 1), 0.5 * dt)
             self.eos()
         self.fresh = True
 

@@ -83,17 +83,24 @@ def test_largest_norms_are_numpys_in_both_builds(n, dim, seed):
 def test_integrator_updates_give_the_same_bits_in_both_builds():
     rng = np.random.default_rng(7)
     pos, vel, acc, old = (rng.normal(size=(5000, 3)) for _ in range(4))
+    rho, drho, drho_old = rng.uniform(990, 1010, 5000), rng.normal(size=5000), rng.normal(size=5000)
     out = {}
     for build in BUILDS:
-        p, v, p0 = pos.copy(), vel.copy(), np.empty_like(pos)
-        getattr(integrators._drift, build)(p0, p, v, acc, 1e-3, 1.0)
-        getattr(integrators._kick, build)(v, acc, 1e-3)
-        getattr(integrators._correct, build)(v, acc, old, 5e-4)
-        out[build] = (p0, p, v)
+        p, v, r, p0 = pos.copy(), vel.copy(), rho.copy(), np.empty_like(pos)
+        getattr(integrators._drift_kick, build)(p0, p, v, acc, r, drho, 1e-3, 1.0, True)
+        getattr(integrators._correct, build)(v, acc, old, r, drho, drho_old, 5e-4, True)
+        out[build] = (p0, p, v, r)
     for a, b in zip(out["serial"], out["parallel"]):
         assert np.array_equal(a, b)
-    assert np.array_equal(out["serial"][0], pos)
-    assert np.allclose(out["serial"][1], pos + 1e-3 * (vel + 0.5e-3 * acc), rtol=0, atol=1e-15)
+    p0, p, v, r = out["serial"]
+    assert np.array_equal(p0, pos)
+    assert np.allclose(p, pos + 1e-3 * (vel + 0.5e-3 * acc), rtol=0, atol=1e-15)
+    assert np.allclose(v, vel + 1e-3 * acc + 5e-4 * (acc - old), rtol=0, atol=1e-15)
+    assert np.allclose(r, rho + 1e-3 * drho + 5e-4 * (drho - drho_old), rtol=1e-15, atol=0)
+    # without density evolution rho is left alone
+    r = rho.copy()
+    integrators._drift_kick.serial(np.empty_like(pos), pos.copy(), vel.copy(), acc, r, drho, 1e-3, 1.0, False)
+    assert np.array_equal(r, rho)
 
 
 @settings(max_examples=80, deadline=None)
