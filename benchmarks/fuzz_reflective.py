@@ -62,7 +62,7 @@ def batch(rng, kind, n, cr, contact, max_reflections):
     no_faces, work = face_arrays(None, dim, 1.0), scratch()
     t0 = time.perf_counter()
     guarded = reflect(pos0, pos, vel, acc, radius, normals, offsets, *no_faces, *work, float(cr),
-                      int(max_reflections), bool(contact), flags, counts)
+                      int(max_reflections), bool(contact), flags, counts)[0]
     seconds = time.perf_counter() - t0
     bad = ~(np.isfinite(pos).all(axis=1) & np.isfinite(vel).all(axis=1))
     escaped = outside_mask(pos, radius, normals, offsets)

@@ -124,13 +124,12 @@ class ReflectivePlugin:
         if self._guarded.shape[0] != n:
             self._guarded = np.zeros(n, np.int8)
             self._counts = np.zeros(n, np.int32)
-        guarded = reflect(pos0, pos, vel, acc, ctx.state.radius, self.normals, self.offsets,
-                          *self.faces, *self.scratch, self.cr, self.max_reflections, self.velocity_at_contact,
-                          self._guarded, self._counts)
-        hit = int(np.count_nonzero(self._counts))
+        guarded, hit, events = reflect(pos0, pos, vel, acc, ctx.state.radius, self.normals, self.offsets,
+                                       *self.faces, *self.scratch, self.cr, self.max_reflections,
+                                       self.velocity_at_contact, self._guarded, self._counts)
         # ctx.stats: in summary.json under "reflective" and in every checkpoint, so the
         # counts are cumulative across restarts
         stats = ctx.stats(self)
         stats["guard_returns"] = stats.get("guard_returns", 0) + guarded
         stats["reflected_particle_steps"] = stats.get("reflected_particle_steps", 0) + hit
-        stats["reflection_events"] = stats.get("reflection_events", 0) + int(self._counts.sum(dtype=np.int64))
+        stats["reflection_events"] = stats.get("reflection_events", 0) + events

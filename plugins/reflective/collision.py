@@ -76,7 +76,8 @@ def _limit(r):
 @by_size
 def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
             gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
-    """Reflect every particle that left the domain during a step; return the guard count.
+    """Reflect every particle that left the domain during a step; return (guard returns,
+    particles reflected, reflections performed) of the step.
 
     pos0, pos, vel, acc: (n, dim) C-contiguous float64: start and end positions (m),
     end-of-step velocity (m/s), the step's acceleration (m/s^2). radius (n,) m.
@@ -94,9 +95,13 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gsh
     three = pos.shape[1] == 3
     rows = ws.shape[0]
     guarded = 0
+    reflected = 0
+    events = 0
     # blocks of particles, each with its own scratch row for corner contacts
     for b in numba.prange(rows):
         g = 0
+        r = 0
+        e = 0
         for i in range(b * n // rows, (b + 1) * n // rows):
             guarded_flags[i] = 0
             reflection_counts[i] = 0
@@ -116,8 +121,13 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gsh
                 g += _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv,
                                   gshape, gstart, gitems, ws[b], wi[b], cr, max_reflections,
                                   velocity_at_contact, guarded_flags, reflection_counts)
+                if reflection_counts[i] > 0:
+                    r += 1
+                    e += reflection_counts[i]
         guarded += g
-    return guarded
+        reflected += r
+        events += e
+    return guarded, reflected, events
 
 
 @numba.njit(cache=True)
@@ -357,7 +367,7 @@ def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflectio
     fa = face_arrays(faces, dim, radius.max() if n else 1.0)
     return int(reflect(pos0, pos, vel, acc, radius, normals, offsets, *fa, *scratch(), float(cr),
                        int(max_reflections), bool(velocity_at_contact), guarded_flags,
-                       reflection_counts))
+                       reflection_counts)[0])
 
 
 def clearance(pos, radius, planes):
