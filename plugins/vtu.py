@@ -217,11 +217,11 @@ class VtuWriter(ScheduledWriter):
             replace_atomically(out / f"{name}_walls.vtu",
                                lambda tmp: meshio.write(tmp, wmesh, file_format="vtu", binary=True))
         # binary: base64 of the raw float64 bytes, so the file holds exact values
-        text = vtu_text(*frame_arrays(ctx.state), compress=self.compress)
-        replace_atomically(path, lambda tmp: tmp.write_text(text))
+        frame = vtu_text(*frame_arrays(ctx.state), compress=self.compress)
+        replace_atomically(path, lambda tmp: tmp.write_text(frame))
         self.frames.append((float(ctx.t), rel))
-        text = pvd_text(self.frames)
-        replace_atomically(self.pvd_path(ctx), lambda tmp: tmp.write_text(text))
+        collection = pvd_text(self.frames)
+        replace_atomically(self.pvd_path(ctx), lambda tmp: tmp.write_text(collection))
         return path
 
     def reopen_for_restart(self, ctx) -> None:

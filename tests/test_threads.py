@@ -12,7 +12,7 @@ from sphcore import runner, threads
 from sphcore.threads import ThreadTuner, candidates
 
 # a 2D dam break of 2,600 particles (above the pair loop's serial limit, PAIRS_PARALLEL_MIN
-# = 2,048: its slabs run in parallel) with the wall model, density diffusion and artificial
+# = 1,000: its slabs run in parallel) with the wall model, density diffusion and artificial
 # viscosity; DAM_2D_BIG has 21,000 (above PARALLEL_MIN = 20,000: the element-wise passes,
 # the wall model's and the reflective walls' kernels run their parallel builds too)
 DAM_2D = """
