@@ -151,6 +151,7 @@ def test_buchner_figures_on_a_synthetic_series():
     out = figures.buchner(tau, ps, exp)
     assert out["mae_points"] == 3
     assert out["mae_rhogH"] == pytest.approx(0.2 / 3, rel=1e-12)
+    assert out["offset_rhogH"] == pytest.approx(0.0, abs=1e-12)  # median of -0.1, 0, +0.1
     assert out["rise_tau_exp"] == pytest.approx(2.25)
     assert out["rise_tau"] == pytest.approx(2.62)
     assert out["rise_dtau"] == pytest.approx(0.37)
@@ -168,8 +169,30 @@ def test_lobovsky_figures_on_a_synthetic_band():
     out = figures.lobovsky(tau, ps, band)
     assert out["band_samples"] == 11
     assert out["in_band_fraction"] == pytest.approx(9 / 11)
+    assert out["offset_rhogH"] == 0.0  # nine of the eleven on the median
     assert out["peak_rhogH"] == 1.5 and out["peak_tau"] == 3.5 and out["peak_in_band"] is False
     assert (out["band_peak_lo_rhogH"], out["band_peak_hi_rhogH"]) == (0.9, 1.1)
+
+
+def test_the_offset_measures_a_shift_and_ignores_spikes():
+    """The experiment itself shifted by +0.25 (Lobovsky: its median; Buchner: its points),
+    with every 20th sample a spike of +-10: the offset is the shift, while the MAE and the
+    band fraction are ruined by the spikes."""
+    from sphcore_plugins.gauges import reference
+
+    band = reference.series("lobovsky_2014_sensor2")
+    ps = band[:, 2] + 0.25
+    ps[::20] += np.where(np.arange(ps[::20].size) % 2 == 0, 10.0, -10.0)
+    out = figures.lobovsky(band[:, 0], ps, band)
+    assert out["offset_rhogH"] == pytest.approx(0.25, abs=1e-12)
+    assert out["in_band_fraction"] < 0.5
+    exp = reference.series("buchner_2002_P1")
+    tau = np.linspace(0.0, 7.5, 7501)
+    ps = np.interp(tau, exp[:, 0], exp[:, 1]) - 0.25
+    ps[::20] += 10.0
+    out = figures.buchner(tau, ps, exp)
+    assert out["offset_rhogH"] == pytest.approx(-0.25, abs=0.02)  # interpolation of the digitised points
+    assert out["mae_rhogH"] > 0.25
 
 
 def test_the_experiment_itself_scores_perfectly_in_si_units():
