@@ -61,12 +61,13 @@ def figures(key, s) -> str:
         return f"{s['status']} at t = {s['t']:.3g} s"
     if key == "buchner":
         p = s.get("probes", {})
-        return (f"P1 MAE {fmt(p.get('probe_P1_mae_rhogH'))} (offset {fmt(p.get('probe_P1_offset_rhogH'))}), "
+        return (f"P1 MAE {fmt(p.get('probe_P1_mae_rhogH'))} (offset {fmt(p.get('probe_P1_offset_rhogH'))}, "
+                f"noise {fmt(p.get('probe_P1_noise_rhogH'))}), "
                 f"rise dtau {fmt(p.get('probe_P1_rise_dtau'))}; P2 MAE {fmt(p.get('probe_P2_mae_rhogH'))}")
     if key == "lobovsky":
         p = s.get("probes", {})
         return (f"in band {fmt(p.get('probe_sensor2_in_band_fraction'), True)} (offset "
-                f"{fmt(p.get('probe_sensor2_offset_rhogH'))}), peak "
+                f"{fmt(p.get('probe_sensor2_offset_rhogH'))}, noise {fmt(p.get('probe_sensor2_noise_rhogH'))}), peak "
                 f"{fmt(p.get('probe_sensor2_peak_rhogH'))} rho g H (band {fmt(p.get('probe_sensor2_band_peak_lo_rhogH'))}"
                 f"-{fmt(p.get('probe_sensor2_band_peak_hi_rhogH'))})")
     if key.startswith("tank"):

@@ -195,6 +195,19 @@ def test_the_offset_measures_a_shift_and_ignores_spikes():
     assert out["mae_rhogH"] > 0.25
 
 
+def test_noise_is_the_ringing_around_the_moving_average():
+    """A straight line has no noise (its centred moving average is itself, up to one sample
+    more on one side of a window whose ends fall between samples: slope x dtau / 2); a ringing of
+    amplitude A and a period 1/20 of the averaging window on top of it has noise A/sqrt(2)
+    (within 2 %: the window holds 20 whole periods up to one sample); NaN without samples."""
+    tau = np.linspace(0.0, 8.0, 80001)  # 1e-4 in tau, as a probe at every_dt = 1e-4 s and H ~ 0.1 m
+    line = 0.3 + 0.05 * tau
+    assert figures.noise(tau, line, 2.6, 5.5) <= 0.05 * 1e-4 / 2
+    ring = line + 0.4 * np.sin(2 * np.pi * tau / (figures.NOISE_WINDOW / 20))
+    assert figures.noise(tau, ring, 2.6, 5.5) == pytest.approx(0.4 / math.sqrt(2), rel=0.02)
+    assert math.isnan(figures.noise(tau, ring, 9.0, 10.0))
+
+
 def test_the_experiment_itself_scores_perfectly_in_si_units():
     """The Lobovsky median, turned into seconds and pascals with H = 0.3 m, rho = 997 kg/m^3,
     lies inside its own band and peaks at the band's median peak; Buchner P1 against itself
