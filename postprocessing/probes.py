@@ -1,13 +1,16 @@
 """Plot every probe of a run against its experiment and print the error figures.
 
-    python postprocessing/probes.py RUN_DIR
+    python postprocessing/probes.py RUN_DIR [--windows WIDTH]
 
 Reads ``RUN_DIR/probes.nc`` (written by the ``probes`` plugin). For each pressure probe
 that names a reference: p/(rho g H) against t sqrt(g/H) with Buchner's points, or against
 t/T (T = sqrt(H/g)) with Lobovsky's 2.5-97.5 % band shaded and its median; other pressure
 probes in Pa against s, depth probes in m against s. One ``probe_<name>.png`` per probe
 beside the run (a name sph itself never writes). The error figures are those of the run
-summary (:mod:`sphcore_plugins.probes.figures`). A missing directory or a run without
+summary (:mod:`sphcore_plugins.probes.figures`); ``--windows WIDTH`` also prints, for each
+pressure probe with a reference, the means of simulation and experiment over consecutive
+windows of WIDTH in the experiment's time scale (:func:`figures.window_means`). A missing
+directory or a run without
 ``probes.nc`` prints one line on stderr and exits with status 2.
 """
 
@@ -88,10 +91,30 @@ def plot(run, probe, t, rho0, g, png):
     plt.close(fig)
 
 
+def print_windows(probe, t, rho0, g, width):
+    """The window means of a referenced pressure probe, one line per window."""
+    from sphcore_plugins.gauges import reference
+    from sphcore_plugins.probes import figures
+
+    ref, height = probe["reference"], probe["H"]
+    kind = reference.SERIES[ref].kind
+    rows = figures.window_means(t * math.sqrt(g / height), probe["values"] / (rho0 * g * height),
+                                reference.series(ref), kind, width)
+    print(f"  window means of p/(rho g H) ({'band median' if kind == 'lobovsky' else 'points'} for the experiment):")
+    print(f"  {'from':>8s} {'sphcore':>9s} {'experiment':>11s} {'difference':>11s}")
+    for a, sim, exp in rows:
+        print(f"  {a:8.3f} {sim:9.3f} {exp:11.3f} {sim - exp:+11.3f}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run", help="a run's output directory (holding probes.nc)")
+    ap.add_argument("--windows", type=float, default=None, metavar="WIDTH",
+                    help="print window means of p/(rho g H), simulation against experiment, windows of WIDTH")
     args = ap.parse_args(argv)
+    if args.windows is not None and not (math.isfinite(args.windows) and args.windows > 0):
+        print(f"probes.py: error: --windows: expected a width > 0, got {args.windows}", file=sys.stderr)
+        return 2
     run = Path(args.run)
     path = run / "probes.nc"
     if not run.is_dir():
@@ -120,6 +143,8 @@ def main(argv=None) -> int:
             errs = figures.errors(probe["reference"], t, v, data["rho0"], data["g"], probe["H"])
             for k, value in errs.items():
                 print(f"  {k:28s} {value:.4f}" if isinstance(value, float) else f"  {k:28s} {value}")
+            if args.windows is not None:
+                print_windows(probe, t, data["rho0"], data["g"], args.windows)
     return 0
 
 

@@ -225,6 +225,26 @@ def test_postprocessing_plots_each_probe_and_prints_the_figures(tiny_run, capsys
     assert all(p.stat().st_mtime_ns == before[p.name] for p in out.iterdir() if p.name in before)
 
 
+def test_postprocessing_prints_window_means_on_request(tiny_run, capsys):
+    """--windows 0.5: the Lobovsky probe's window means over [2, 7] (ten rows), the same
+    numbers as figures.window_means; a width that is not > 0 is refused with exit 2."""
+    from sphcore_plugins.gauges import reference
+    from sphcore_plugins.probes import figures
+
+    out, _ = tiny_run
+    assert _postprocessing().main([str(out), "--windows", "0.5"]) == 0
+    printed = capsys.readouterr().out
+    data = _postprocessing().read(out / "probes.nc")
+    probe = next(p for p in data["probes"] if p["name"] == "right")
+    tau = data["t"] * math.sqrt(data["g"] / probe["H"])
+    rows = figures.window_means(tau, probe["values"] / (data["rho0"] * data["g"] * probe["H"]),
+                                reference.series(probe["reference"]), "lobovsky", 0.5)
+    assert [r[0] for r in rows] == pytest.approx(np.arange(2.0, 7.0, 0.5))
+    assert f"{rows[0][0]:8.3f} {rows[0][1]:9.3f} {rows[0][2]:11.3f}" in printed
+    assert _postprocessing().main([str(out), "--windows", "-1"]) == 2
+    assert "--windows" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("what", ["missing", "no_probes"])
 def test_postprocessing_on_a_bad_path_prints_one_line_and_exits_2(tmp_path, capsys, what):
     path = tmp_path / "nothing" if what == "missing" else tmp_path

@@ -208,6 +208,19 @@ def test_noise_is_the_ringing_around_the_moving_average():
     assert math.isnan(figures.noise(tau, ring, 9.0, 10.0))
 
 
+def test_window_means_show_where_a_shift_lies():
+    """The Lobovsky median shifted by +0.3 after tau = 4: the windows before 4 show no
+    difference, those after show 0.3 (up to the band's sampling within a window)."""
+    from sphcore_plugins.gauges import reference
+
+    band = reference.series("lobovsky_2014_sensor2")
+    ps = band[:, 2] + np.where(band[:, 0] >= 4.0, 0.3, 0.0)
+    rows = figures.window_means(band[:, 0], ps, band, "lobovsky", 0.5)
+    assert len(rows) == 10 and rows[0][0] == 2.0
+    for a, sim, exp in rows:
+        assert sim - exp == pytest.approx(0.3 if a >= 4.0 else 0.0, abs=1e-12)
+
+
 def test_the_experiment_itself_scores_perfectly_in_si_units():
     """The Lobovsky median, turned into seconds and pascals with H = 0.3 m, rho = 997 kg/m^3,
     lies inside its own band and peaks at the band's median peak; Buchner P1 against itself

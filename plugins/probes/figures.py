@@ -122,6 +122,28 @@ def lobovsky(tau, ps, band) -> dict:
             "peak_in_band": bool(out["band_peak_lo_rhogH"] <= peak <= out["band_peak_hi_rhogH"])}
 
 
+def window_means(tau, ps, data, kind, width, lo=None, hi=None) -> list[tuple[float, float, float]]:
+    """(start, simulation mean, experiment mean) of p* over consecutive windows of ``width``
+    in tau, from ``lo`` to ``hi`` (the scored window when None); the experiment's value is
+    the mean of its points (Buchner) or of its band's median (Lobovsky) in the window.
+    A window without a sample of either side gives NaN on that side. Shows where a
+    departure lies in time (an impact, a plateau, a second rise), which the MAE, the band
+    fraction and the offset each fold into one number."""
+    tau, ps = np.asarray(tau, float), np.asarray(ps, float)
+    col = 2 if kind == "lobovsky" else 1
+    default = LOBOVSKY_WINDOW if kind == "lobovsky" else BUCHNER_WINDOW
+    lo = default[0] if lo is None else lo
+    hi = default[1] if hi is None else hi
+    rows = []
+    for a in np.arange(lo, hi - 1e-12, width):
+        b = min(a + width, hi)
+        sim = ps[(tau >= a) & (tau < b)]
+        exp = data[(data[:, 0] >= a) & (data[:, 0] < b), col]
+        rows.append((float(a), float(sim.mean()) if sim.size else float("nan"),
+                     float(exp.mean()) if exp.size else float("nan")))
+    return rows
+
+
 def errors(name, t, p, rho, g, height) -> dict:
     """Error figures of the series (t in s, p in Pa) against the shipped reference ``name``.
 
