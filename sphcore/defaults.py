@@ -36,7 +36,8 @@ CORE: dict[str, dict[str, O]] = {
     "physics": {
         "sph": O(True, "bool", doc="compute SPH forces and density; false: free particles + plugins only"),
         "gravity": O([0.0, -9.81, 0.0], "vector", "m/s^2", "body acceleration; first dim components are used"),
-        "hydrostatic_init": O(True, "bool", doc="start each fluid block with hydrostatic pressure and density below its top"),
+        "hydrostatic_init": O(True, "bool", doc="start each fluid block at rest in hydrostatic equilibrium below its "
+                              "top: exact Tait pressure and density, masses scaled by rho / rho0"),
         "modified_pressure": O(False, "bool", doc="Batchelor's modified pressure: the EOS gives P = p - p_hydrostatic, "
                                "gravity acts as buoyancy g (1 - rho0/rho); for fluid at rest in a container"),
     },

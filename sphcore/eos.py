@@ -71,6 +71,27 @@ def fill_pressure(rho, rho0, c0, gamma, p_background, p):
         p[i] = pressure(rho[i], rho0, b, gamma, p_background)
 
 
+def hydrostatic_pressure(depth, rho0, c0, gamma, g):
+    """Gauge pressure (Pa) at ``depth`` (m, array) below the free surface of a Tait fluid at rest.
+
+    Hydrostatics dp/dd = rho(p) g with the Tait density rho = rho0 (1 + p/B)^(1/gamma),
+    B = rho0 c0^2 / gamma, integrates in closed form (p = 0 at d = 0):
+
+        p(d) = B [(1 + (1 - 1/gamma) rho0 g d / B)^(gamma / (gamma - 1)) - 1],
+
+    and p = B (exp(rho0 g d / B) - 1) for gamma = 1. It exceeds the incompressible rho0 g d
+    by the fraction g d / (2 c0^2) to first order (0.25 % at the bottom of a column with
+    c0 = 10 sqrt(2 g H)). Evaluated with log1p / expm1, exact to round-off for small depths.
+    """
+    b = c0 * c0 * rho0 / gamma
+    x = rho0 * g * np.asarray(depth, float) / b
+    e = 1.0 - 1.0 / gamma
+    if abs(e) < 1e-12:
+        return b * np.expm1(x)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return b * np.expm1(np.log1p(e * x) / e)
+
+
 def density_of(p, rho0, c0, gamma, p_background=0.0):
     """rho(p) (kg/m^3) of a numpy array of pressures (Pa), base clamped at BASE_MIN.
 

@@ -124,7 +124,7 @@ class Simulation:
         self.ctx = ctx = RunContext(case, prm, state, output_dir, restarting,
                                     plugin_name=lambda plugin: pm.get_name(plugin) or type(plugin).__name__)
         if tops is not None and cfg["physics"]["hydrostatic_init"] and not prm.modified_pressure:
-            _hydrostatic_start(prm, state, tops)
+            _hydrostatic_start(case, prm, state, tops)
         saved = checkpoint.read(output_dir) if restarting else None
         if saved:  # constants above come from the case's initial particles, as in the first run
             checkpoint.restore_state(ctx, *saved)
@@ -293,8 +293,29 @@ class Simulation:
         return self.t_end - self.t <= 1e-9 * (self.dt or self.t_end)
 
 
-def _hydrostatic_start(prm, st, tops):
-    """p = rho0 g (top - z) below each block's top, rho from the inverse Tait equation."""
+def _hydrostatic_start(case, prm, st, tops):
+    """Each fluid block at rest in the discrete equilibrium of the SPH sums: the exact
+    hydrostatic pressure of the Tait fluid below the block's top
+    (:func:`sphcore.eos.hydrostatic_pressure`), the density from the inverse Tait equation,
+    and the mass of each particle scaled by rho / rho0, since the particles stand on a
+    uniform lattice: the fluid's extra mass at depth is in the masses, not in a closer
+    spacing.
+
+    Until 2026-11-24 the pressure was rho0 g d and the masses rho0 dx^dim. The pressure
+    sums of a uniform lattice of equal masses then see the density stratification only
+    through the p_j / rho_j^2 of the momentum equation: in a 1 m tank of plain Tait water at
+    h = 1.5 dx the interior's vertical acceleration drifted from -0.004 g under the free
+    surface to -0.018 g at the bottom, and a particle along a side wall differed from its
+    interior neighbours by up to 0.004 g (a shear the wall's terms do not carry). Now both
+    are -0.0026 g everywhere below the free surface's reach (the lattice normalisation
+    (1 - lambda) g), walls included (``tests/test_hydrostatic_start.py``).
+    """
     fluid = st.kind == FLUID
-    p = prm.rho0 * prm.g_abs * (tops - st.pos @ prm.up)
-    st.rho[fluid] = eos.density_of(p[fluid], prm.rho0, prm.c0, prm.gamma)
+    p = eos.hydrostatic_pressure(tops[fluid] - st.pos[fluid] @ prm.up, prm.rho0, prm.c0, prm.gamma, prm.g_abs)
+    if not np.all(np.isfinite(p)):
+        raise CaseError(case.file, "eos.gamma", f"a Tait exponent {prm.gamma:g} with c0 = {prm.c0:g} m/s "
+                        "cannot hold the fluid's depth at rest (the hydrostatic density diverges); "
+                        "raise eos.gamma or the sound speed, or set physics.hydrostatic_init = false")
+    rho = eos.density_of(p, prm.rho0, prm.c0, prm.gamma)
+    st.rho[fluid] = rho
+    st.m[fluid] *= rho / prm.rho0

@@ -3,8 +3,10 @@ contact radius a case sets (it once took the layer thickness and the floor from 
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
+from sphcore import eos
 from sphcore.testing import run_case
 
 TANK = """
@@ -30,11 +32,17 @@ use = ["reflective", "pressure_gauge"]
 
 @pytest.mark.parametrize("radius", ["", "radius = 0.003", "radius = 0.005"])
 def test_gauge_reads_the_initial_hydrostatic_tank_as_exact(tmp_path, radius):
-    """At t = 0 the particles carry the exact hydrostatic pressure rho0 g (H - y): every
-    layer's error is round-off and nothing has moved, for any contact radius."""
+    """At t = 0 the particles carry the exact hydrostatic pressure of the Tait fluid
+    (sphcore.eos.hydrostatic_pressure): the gauge, which compares with the incompressible
+    rho0 g (H - y), reads the compressibility's excess p(d) / (rho0 g d) - 1 at the deepest
+    layer (d = H - dx/2; 0.24 % in this 0.2 m tank at c0 = 10 sqrt(2 g H)), to round-off,
+    and nothing has moved, for any contact radius."""
     s = run_case(tmp_path, TANK.format(radius=radius))
     g = s["pressure_gauge"]
     assert s["status"] == "completed"
-    assert g["pressure_max_layer_err"] < 1e-9  # round-off: 1e-12 measured
+    d = 0.2 - 0.005
+    excess = eos.hydrostatic_pressure(np.array([d]), 1000.0, s["c0"], 7.0, 9.81)[0] / (1000.0 * 9.81 * d) - 1
+    assert 0.002 < excess < 0.003
+    assert g["pressure_max_layer_err"] == pytest.approx(excess, rel=1e-9)
     assert abs(g["surface_drift_m"]) < 1e-9
     assert g["max_displacement_m"] < 1e-12
