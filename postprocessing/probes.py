@@ -10,8 +10,8 @@ beside the run (a name sph itself never writes). The error figures are those of 
 summary (:mod:`sphcore_plugins.probes.figures`); ``--windows WIDTH`` also prints, for each
 pressure probe with a reference, the means of simulation and experiment over consecutive
 windows of WIDTH in the experiment's time scale (:func:`figures.window_means`). A missing
-directory or a run without
-``probes.nc`` prints one line on stderr and exits with status 2.
+directory, a run without ``probes.nc`` or a WIDTH that is not > 0 prints one line on
+stderr and exits with status 2.
 """
 
 from __future__ import annotations
