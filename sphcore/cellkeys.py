@@ -8,28 +8,25 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .parallel import PARALLEL_MIN, serial_and_parallel
+from .parallel import CHUNKS, PARALLEL_MIN, serial_and_parallel
 
 MAX_AXIS_CELLS = 1 << 21  # cells per axis; the keys of three axes then fit in an int64
 MAX_SLABS = 64  # slabs of the pair loop (two phases of up to 32 parallel tasks)
 
 
-BOX_CHUNKS = 16  # ranges of particles whose boxes are found alone (maybe in parallel), then merged
-
-
 def _bounding_box(pos):
     """Lower and upper corner (3,) of the points; z is 0 in 2D; NaN where a coordinate is.
-    Over BOX_CHUNKS ranges of particles, merged in order (a minimum and a maximum do not
+    Over CHUNKS ranges of particles, merged in order (a minimum and a maximum do not
     depend on the order; a NaN in any range makes that lower corner NaN)."""
     n, dim = pos.shape
-    part = np.empty((BOX_CHUNKS, 2, 3))
-    for ch in prange(BOX_CHUNKS):
+    part = np.empty((CHUNKS, 2, 3))
+    for ch in prange(CHUNKS):
         lo = np.zeros(3)
         hi = np.zeros(3)
         for d in range(dim):
             lo[d] = np.inf
             hi[d] = -np.inf
-        for i in range(ch * n // BOX_CHUNKS, (ch + 1) * n // BOX_CHUNKS):
+        for i in range(ch * n // CHUNKS, (ch + 1) * n // CHUNKS):
             for d in range(dim):
                 x = pos[i, d]
                 if x < lo[d]:
@@ -46,7 +43,7 @@ def _bounding_box(pos):
     for d in range(dim):
         lo[d] = np.inf
         hi[d] = -np.inf
-        for ch in range(BOX_CHUNKS):
+        for ch in range(CHUNKS):
             x = part[ch, 0, d]
             if x < lo[d] or x != x:
                 lo[d] = x

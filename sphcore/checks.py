@@ -11,7 +11,7 @@ from numba import njit, prange
 
 from .eos import energy_potential, tait_b
 from .geometry import plane_distance
-from .parallel import by_size
+from .parallel import CHUNKS, by_size
 
 OK, NONFINITE, RHO_LOW, RHO_HIGH, OUTSIDE = 0, 1, 2, 3, 4
 REASONS = {
@@ -20,9 +20,6 @@ REASONS = {
     RHO_HIGH: "density above the upper bound",
     OUTSIDE: "a particle left the domain (its centre crossed a wall plane)",
 }
-
-
-CHUNKS = 16  # contiguous ranges of particles, scanned alone (maybe in parallel), then combined in order
 
 
 @by_size

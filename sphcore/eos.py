@@ -83,7 +83,7 @@ def hydrostatic_pressure(depth, rho0, c0, gamma, g):
     by the fraction g d / (2 c0^2) to first order (0.25 % at the bottom of a column with
     c0 = 10 sqrt(2 g H)). Evaluated with log1p / expm1, exact to round-off for small depths.
     """
-    b = c0 * c0 * rho0 / gamma
+    b = tait_b(c0, rho0, gamma)
     x = rho0 * g * np.asarray(depth, float) / b
     e = 1.0 - 1.0 / gamma
     if abs(e) < 1e-12:

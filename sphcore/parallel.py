@@ -22,6 +22,11 @@ import types
 from numba import njit
 
 PARALLEL_MIN = 20_000  # particles (rows of the first argument)
+# contiguous ranges of particles that a reduction (a bounding box, the largest norms, the
+# instability scan) handles alone, perhaps in parallel, then combines in order: the answer
+# is the serial loop's for any thread count. A module constant compiled into those kernels;
+# sphcore.jitcache recompiles them when it changes.
+CHUNKS = 16
 
 
 def twin(pyfunc, suffix: str, **constants):

@@ -307,8 +307,8 @@ def _hydrostatic_start(case, prm, st, tops):
     h = 1.5 dx the interior's vertical acceleration drifted from -0.004 g under the free
     surface to -0.018 g at the bottom, and a particle along a side wall differed from its
     interior neighbours by up to 0.004 g (a shear the wall's terms do not carry). Now both
-    are -0.0026 g everywhere below the free surface's reach (the lattice normalisation
-    (1 - lambda) g), walls included (``tests/test_hydrostatic_start.py``).
+    are -0.0026 g everywhere below the free surface's reach ((lambda - 1) g, the lattice
+    normalisation), walls included (``tests/test_hydrostatic_start.py``).
     """
     fluid = st.kind == FLUID
     p = eos.hydrostatic_pressure(tops[fluid] - st.pos[fluid] @ prm.up, prm.rho0, prm.c0, prm.gamma, prm.g_abs)

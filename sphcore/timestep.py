@@ -18,10 +18,7 @@ import math
 import numpy as np
 from numba import prange
 
-from .parallel import by_size
-
-
-CHUNKS = 16  # contiguous ranges of particles, each reduced alone, then in order
+from .parallel import CHUNKS, by_size
 
 
 @by_size

@@ -89,3 +89,18 @@ def test_a_tank_at_rest_starts_in_the_discrete_equilibrium(tmp_path, h_over_dx):
     assert np.abs(acc[deep, 0]).max() < 5e-5
     # the masses carry the stratification: rho / m is the lattice's 1 / dx^2 everywhere
     assert st_.rho / st_.m == pytest.approx(1.0 / prm.dx**2, rel=1e-12)
+
+
+def test_a_column_the_eos_cannot_hold_at_rest_is_refused_and_nothing_is_written(tmp_path, capsys):
+    """gamma = 0.5, c0 = 2 m/s, a 1 m column: the Tait density diverges at 0.82 m depth
+    (1 + (1 - 1/gamma) rho0 g d / B = 0), so the start has no hydrostatic state: exit 2,
+    one line naming the file and eos.gamma, no output directory."""
+    from sphcore import cli
+
+    text = TANK.format(h=1.3).replace("max = [0.6, 0.6]", "max = [0.6, 1.0]").replace(
+        "max = [0.6, 0.7]", "max = [0.6, 1.2]") + "\n[eos]\nc0 = 2.0\ngamma = 0.5\n"
+    case_dir = write_case(tmp_path / "deep", text)
+    assert cli.main(["run", str(case_dir), "--output", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "eos.gamma" in err and "case.toml" in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
