@@ -83,6 +83,12 @@ BAD = [
     (["probes.depth=[{name = 'x'}]"], "probes.depth[0].point", "required"),
     (["probes.pressure=[]", "probes.depth=[]"], "probes", "no probe"),
     (["probes.every_dt=-1.0"], "probes.every_dt", ">= 0"),
+    (["probes.pressure=[{name = 'a', point = [0.3, 0.1], normal = [0.0, 0.0]}]"], "probes.pressure[0].normal",
+     "nonzero"),
+    (["probes.pressure=[{name = 'a', point = [0.3, 0.1], normal = [-1.0, 0.0, 0.0]}]"], "probes.pressure[0].normal",
+     "2 components"),
+    (["probes.pressure=[{name = 'a', point = [0.3, 0.1], mode = 'particle', normal = [-1.0, 0.0]}]"],
+     "probes.pressure[0].normal", "wall-mode"),
 ]
 
 
@@ -307,6 +313,28 @@ def test_pressure_cases_put_their_sensors_on_the_downstream_wall_at_the_publishe
     block = case_.config["blocks"][0]
     assert block["max"][1] - block["min"][1] == pytest.approx(p.height)
     assert case_.config["time"]["t_end"] * math.sqrt(9.81 / p.height) >= 6.5
+
+
+def test_wall_sensors_read_the_fluid_in_front_of_the_face_they_sit_on(tmp_path):
+    """The face normal (into the fluid) is found from the wall plane or obstacle face the
+    sensor lies on; a given normal is normalised; a sensor off every wall, or a particle-mode
+    one, has none (it reads every particle around it)."""
+    case_, pm = runner.load(ROOT / "cases" / "dam_break_obstacle_3d")
+    probes = {p.name: p for p in pm.get_plugin("probes").probes}
+    for name in ("P1", "P2", "P3", "P4"):  # on the box's face turned towards the water
+        np.testing.assert_array_equal(probes[name].face_n, [1.0, 0.0, 0.0])
+    case_, pm = runner.load(ROOT / "cases" / "dam_break_buchner")
+    np.testing.assert_array_equal(pm.get_plugin("probes").probes[0].face_n, [-1.0, 0.0])  # the right wall
+    case_dir = tiny(tmp_path)
+    probes = {p.name: p for p in runner.load(case_dir)[1].get_plugin("probes").probes}
+    np.testing.assert_array_equal(probes["right"].face_n, [-1.0, 0.0])
+    assert probes["back"].face_n is None  # particle mode
+    over = ["probes.pressure=[{name = 'mid', point = [0.15, 0.1]}, {name = 'n', point = [0.15, 0.1], "
+            "normal = [3.0, 4.0]}]"]
+    probes = {p.name: p for p in runner.load(case_dir, [o.replace("'", '"') for o in over])[1]
+              .get_plugin("probes").probes}
+    assert probes["mid"].face_n is None
+    np.testing.assert_allclose(probes["n"].face_n, [0.6, 0.8], rtol=0, atol=1e-15)
 
 
 def test_peer_series_scores_the_experiment_itself_as_exact(tmp_path, capsys):

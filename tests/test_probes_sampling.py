@@ -30,9 +30,10 @@ def block(height=H, width=0.5):
     return pos, rho, rho * DX * DX
 
 
-def sample(points, pos, p, rho, m, wall, kernel="wendland_c2"):
+def sample(points, pos, p, rho, m, wall, kernel="wendland_c2", face_n=(0.0, 0.0)):
     out_p, out_w = np.zeros(len(points)), np.zeros(len(points))
     interpolate_pressure(np.ascontiguousarray(points, float), pos, p, rho, m, KERNEL_IDS[kernel], HS, GRAV, wall,
+                         np.asarray(face_n, float),
                          out_p, out_w)
     return out_p, out_w
 
@@ -82,6 +83,30 @@ def test_a_sensor_with_no_particle_in_its_support_reads_zero_and_is_flagged():
     pos, rho, m = block()
     got, w = sample(np.array([[0.5, 0.3 + 2 * HS + 1e-6], [0.9, 0.1]]), pos, RHO0 * G * (H - pos[:, 1]), rho, m, True)
     assert (got == 0).all() and (w == 0).all()
+
+
+def test_a_sensor_below_a_convex_edge_reads_only_the_water_in_front_of_its_face():
+    """A step [0, 0.2] x [0, 0.1] in water (the particles around it): a sensor on its right
+    face one spacing below the top edge has water above the step (x < 0.2) within 2h. With
+    the face's normal it reads exactly the water in front of the face (here a constant
+    field there and a different one above the step); without it the two are mixed. On a
+    plane wall (the block's right side) the normal changes nothing, bit for bit."""
+    pos, rho, m = block(height=0.3, width=0.4)
+    keep = ~((pos[:, 0] < 0.2) & (pos[:, 1] < 0.1))
+    pos, rho, m = np.ascontiguousarray(pos[keep]), rho[keep], m[keep]
+    front = pos[:, 0] > 0.2
+    p = np.where(front, 5000.0, -800.0)  # stagnation in front, suction over the edge
+    sensor = np.array([[0.2, 0.1 - DX]])
+    got, w = sample(sensor, pos, p, rho, m, False, face_n=(1.0, 0.0))
+    assert w[0] > 0 and got[0] == pytest.approx(5000.0, rel=1e-13)
+    mixed, _ = sample(sensor, pos, p, rho, m, False)
+    assert mixed[0] < 5000.0 - 100.0  # the particles over the step pull it down
+    pos, rho, m = block()
+    hydro = RHO0 * G * (H - pos[:, 1])
+    on_wall = WALL_POINTS[:5]  # the right wall x = 0.5
+    a, _ = sample(on_wall, pos, hydro, rho, m, True, face_n=(-1.0, 0.0))
+    b, _ = sample(on_wall, pos, hydro, rho, m, True)
+    np.testing.assert_array_equal(a, b)
 
 
 def test_line_points_are_centres_of_equal_pieces():

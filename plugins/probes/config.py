@@ -8,6 +8,8 @@
     start = [3.22, 0.1555]               # a line sensor (m), averaged over `points` samples,
     end = [3.22, 0.1645]                 # or `point = [x, y]` for a point sensor
     mode = "wall"                        # or "particle"
+    normal = [-1.0, 0.0]                 # optional: the face's normal into the fluid
+                                         # (default: that of the wall the sensor lies on)
     reference = "buchner_2002_P1"        # optional: a shipped experiment
     H = 0.6                              # m, the column height that scales the reference
 
@@ -50,6 +52,9 @@ PRESSURE = {
                      positive=True),
     "mode": Option("wall", "str", doc="wall: particle pressures carried hydrostatically to the sensor (the "
                    "pressure a wall carries); particle: the plain Shepard interpolation", choices=("wall", "particle")),
+    "normal": Option(None, "vector", doc="wall mode: normal of the sensor's face, into the fluid; only particles "
+                     "in front of the face are read. Default: the normal of the wall plane or face the sensor "
+                     "lies on (none for a sensor off every wall)", nullable=True),
     "reference": Option(None, "str", doc="shipped experiment to compare with: "
                         + ", ".join(reference.SERIES), nullable=True),
     "H": Option(None, "float", "m", "column height that scales the reference (p/(rho g H), t sqrt(g/H))",
@@ -76,6 +81,7 @@ class Probe:
     end: np.ndarray
     points: np.ndarray
     mode: str = ""
+    face_n: np.ndarray | None = None
     reference: str | None = None
     height: float | None = None
 
@@ -101,6 +107,42 @@ def _inside(case, file, key, pts):
             i = int(np.argmax(solid))
             raise CaseError(file, key, f"point {pts[i].round(9).tolist()} lies inside a solid wall "
                             "([[domain.walls]]); a sensor goes on its face or in the fluid")
+
+
+def _wall_normal(case, pts) -> np.ndarray | None:
+    """Unit normal (into the fluid) of the wall every point of ``pts`` lies on, within
+    ON_WALL_TOL (m) of a wall plane or face; None when a point is off every wall or the
+    points lie on different walls. At an edge or corner of planes the first plane counts."""
+    found = None
+    for x in pts:
+        n = None
+        if case.planes.count:
+            d = case.planes.distances(x[None, :])[0]
+            on = np.flatnonzero(np.abs(d) <= ON_WALL_TOL)
+            if on.size:
+                n = case.planes.normals[on[0]]
+        faces = getattr(case, "faces", None)
+        if n is None and faces is not None and faces.count and faces.distances(x[None, :])[0] <= ON_WALL_TOL:
+            n = faces.normal_at(x[None, :])[0]
+        if n is None or (found is not None and not np.allclose(n, found, atol=1e-9)):
+            return None
+        found = n
+    return None if found is None else np.asarray(found, float)
+
+
+def _face_normal(case, file, key, e, pts) -> np.ndarray | None:
+    """The sensor face's normal of a wall-mode probe: given (``normal``) or found."""
+    if e["mode"] != "wall":
+        if e["normal"] is not None:
+            raise CaseError(file, f"{key}.normal", "only a wall-mode sensor has a face (mode = \"wall\")")
+        return None
+    if e["normal"] is None:
+        return _wall_normal(case, pts)
+    n = _vec(file, f"{key}.normal", e["normal"], case.dim)
+    norm = float(np.linalg.norm(n))
+    if not np.isfinite(norm) or norm == 0.0:
+        raise CaseError(file, f"{key}.normal", f"expected a nonzero finite vector, got {e['normal']}")
+    return n / norm
 
 
 def _name(file, key, e, seen):
@@ -147,7 +189,8 @@ def parse(case) -> tuple[float, list[Probe]]:
             if e["H"] is None:
                 raise CaseError(file, f"{key}.H", f"required with reference = {ref!r}: the column height (m) that "
                                 "scales p/(rho g H) and t sqrt(g/H)")
-        probes.append(Probe(name, "pressure", key, start, end, pts, e["mode"], ref, e["H"]))
+        face_n = _face_normal(case, file, key, e, pts)
+        probes.append(Probe(name, "pressure", key, start, end, pts, e["mode"], face_n, ref, e["H"]))
     for k, entry in enumerate(cfg["depth"]):
         key = f"{TABLE}.depth[{k}]"
         e = validate_table(DEPTH, entry, file, key)

@@ -78,6 +78,9 @@ class ProbesPlugin:
         self.idx = np.empty(ctx.state.pos.shape[0], np.int64)  # candidate indices, reused every sample
         self.is_pressure = np.array([p.kind == "pressure" for p in self.probes])
         self.work = [(np.zeros(len(p.points)), np.zeros(len(p.points))) for p in self.probes]
+        # the face each wall sensor sits on (zeros: none, every particle is read)
+        self.face_n = [np.ascontiguousarray(p.face_n if p.face_n is not None else np.zeros(dim))
+                       for p in self.probes]
         self.rho0 = float(ctx.params.rho0)
         self.config, self.case_name = case.config, case.config["case"]["name"] or case.dir.name
         # a restart keeps the samples up to the checkpoint's step, found at the first output
@@ -99,7 +102,7 @@ class ProbesPlugin:
             if p.kind == "pressure":
                 out_p, out_w = self.work[k]
                 interpolate_pressure(p.points, pc, prc, rc, mc, self.kernel_id, self.h, self.gravity,
-                                     p.mode == "wall", out_p, out_w)
+                                     p.mode == "wall", self.face_n[k], out_p, out_w)
                 values[k] = out_p.mean()  # a dry part of a line sensor reads 0 (gauge)
                 dry[k] = not (out_w > 0).any()
             else:

@@ -14,7 +14,12 @@ Definitions (h the smoothing length, W the run's kernel, V_j = m_j / rho_j):
   particle's pressure carried hydrostatically to the sensor point, the pressure a wall
   carries in a boundary-integral wall model. For a hydrostatic field of constant density
   it is exactly rho g (H - y) at any point; with the Tait densities of a column at rest it
-  is within max_j |rho_j - rho0| |g| 2h of it;
+  is within max_j |rho_j - rho0| |g| 2h of it. A sensor on a wall face reads only the
+  particles in front of that face ((x_j - x) . n > 0, n the face's normal into the fluid):
+  a transducer is pressed by the water touching its face, not by water round a convex edge
+  of the wall within 2h of it (the flow over the top of an obstacle, below which a sensor
+  sits); on a plane wall or inside a concave corner no particle lies behind the face, so
+  the filter changes nothing there;
 - no fluid particle within 2h of the point: the point is dry, p = 0 (gauge) and flagged;
 - fluid fraction: phi(x) = sum_j V_j W(x - x_j), each particle also counted through its
   mirror image across every wall plane closer than 2h to x (a wall would otherwise cut the
@@ -90,24 +95,33 @@ def select_near(pos, kind, seg_a, seg_b, reach, out):
 
 
 @njit(cache=True)
-def interpolate_pressure(points, pos, p, rho, m, kernel_id, h, gravity, wall, out_p, out_w):
+def interpolate_pressure(points, pos, p, rho, m, kernel_id, h, gravity, wall, face_n, out_p, out_w):
     """Shepard-normalised pressure (Pa) at each of ``points`` (k, dim) into ``out_p``, and the
     Shepard sum sum_j V_j W (1) into ``out_w`` (0: no particle in the support, out_p = 0).
 
     ``wall``: add rho_j g.(x - x_j) to each particle's pressure (wall mode, see the module
-    docstring). ``gravity`` has at least dim components (m/s^2).
+    docstring). ``gravity`` has at least dim components (m/s^2). ``face_n`` (dim,): the
+    normal of the wall face the sensor sits on, into the fluid; particles with
+    (x_j - x) . face_n <= 0 are not read. A zero vector reads every particle.
     """
     k, dim = points.shape
     n = pos.shape[0]
     rmax = SUPPORT * h
+    facing = False
+    for d in range(dim):
+        facing = facing or face_n[d] != 0.0
     for s in range(k):
         num = 0.0
         den = 0.0
         for j in range(n):
             r2 = 0.0
+            front = 0.0
             for d in range(dim):
                 e = points[s, d] - pos[j, d]
                 r2 += e * e
+                front -= e * face_n[d]
+            if facing and front <= 0.0:
+                continue
             r = math.sqrt(r2)
             if r >= rmax:
                 continue
