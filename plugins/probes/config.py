@@ -112,7 +112,8 @@ def _inside(case, file, key, pts):
 def _wall_normal(case, pts) -> np.ndarray | None:
     """Unit normal (into the fluid) of the wall every point of ``pts`` lies on, within
     ON_WALL_TOL (m) of a wall plane or face; None when a point is off every wall or the
-    points lie on different walls. At an edge or corner of planes the first plane counts."""
+    points lie on different walls. On an edge or a corner (two or more walls at once) the
+    first plane, or one of the faces, counts: a sensor there should give ``normal``."""
     found = None
     for x in pts:
         n = None
