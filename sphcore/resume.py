@@ -3,8 +3,9 @@
 
 A restart continues the same run only: the case after ``--set`` (except the keys in
 :data:`MAY_DIFFER` and plugin options declared with ``Option(restart=True)``), the sphcore
-version, the case file and the output directory must be those recorded in the checkpoint. Otherwise frames of another run would be appended to the
-same files; the restart is refused (exit status 2) with what differs.
+version, the case file and the output directory must be those recorded in the checkpoint.
+Otherwise frames of another run would be appended to the same files; the restart is refused
+(exit status 2) with what differs.
 """
 
 from __future__ import annotations
