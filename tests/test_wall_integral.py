@@ -194,3 +194,47 @@ def test_water_does_not_cling_to_the_back_wall_with_the_wall_model(tmp_path):
         err[name] = s["front_gauge"]["rms_rel_err_martin_moyce_height"]
     assert err["model"] < 0.10
     assert err["bare"] > 2.5 * err["model"]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_stagnation_flow_is_compressed_only_where_the_kernel_is_truncated(tmp_path, dim):
+    """The continuity sum of the divergence-free flow u = a x, w = -a z (z up from the
+    floor) on the initial lattice, reflective walls alone, no gravity: drho/dt / (rho0 a)
+    is -(M_tt - M_nn) at a layer whose support the floor truncates, M the layer's second
+    moment sum_j V_j (x_j - x_i) (x) grad_i W_ij (an independent brute-force sum here), and
+    0 to round-off where the support is whole. This is the floor layer's spurious
+    compression or expansion of docs/wall_pressure.md ("The floor layer's excess")."""
+    from sphcore.kernels import WENDLAND_C2, kernel_f
+
+    dx, hdx, side = 0.02, 1.3, 0.3
+    h = hdx * dx
+    lo, hi = [0.0] * dim, [side] * dim
+    text = BOX.format(dim=dim, lo=lo, hi=hi, use='["reflective"]')
+    case, pm = runner.load(write_case(tmp_path / "box", text))
+    sim = Simulation(case, pm)
+    st = sim.ctx.state
+    x = st.pos
+    st.vel[:] = 0.0
+    st.vel[:, 0] = x[:, 0] - 0.5 * side
+    st.vel[:, -1] = -x[:, -1]
+    sim.integrator.invalidate()
+    sim.integrator.rates()
+    rate = sim.integrator.drho / 1000.0
+    # the lattice's moments of a node at (k + 1/2) dx above a wall, brute force
+    n = 4
+    k = np.arange(-n, n + 1) * dx
+    off = np.stack(np.meshgrid(*([k] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
+    r = np.linalg.norm(off, axis=1)
+    keep = (r > 0) & (r < 2 * h)
+    off, r = off[keep], r[keep]
+    f = dx ** dim * np.array([kernel_f(WENDLAND_C2, ri, h, dim) for ri in r])
+    far = np.all(np.abs(x[:, :-1] - 0.5 * side) < 0.5 * side - 2 * h - 1e-9, axis=1)
+    for layer in range(4):
+        inside = off[:, -1] + (layer + 0.5) * dx > 0.0
+        m = -np.einsum("k,ka,kb->ab", f[inside], off[inside], off[inside])
+        expected = -(m[0, 0] - m[-1, -1])
+        sel = far & np.isclose(x[:, -1], (layer + 0.5) * dx)
+        assert sel.sum() > 0
+        assert np.allclose(rate[sel], expected, rtol=1e-9, atol=1e-12)
+    if dim == 2:  # M_tt = 0.762, M_nn = 0.487 at the floor layer
+        assert abs(np.mean(rate[far & np.isclose(x[:, -1], 0.5 * dx)]) + 0.275) < 0.001
