@@ -11,7 +11,6 @@ vertical velocity printed, with rho g dx, the hydrostatic step from one layer to
 from __future__ import annotations
 
 import argparse
-
 from pathlib import Path
 
 import xarray as xr

@@ -197,7 +197,7 @@ def test_water_does_not_cling_to_the_back_wall_with_the_wall_model(tmp_path):
 
 
 @pytest.mark.parametrize("dim", [2, 3])
-def test_a_stagnation_flow_is_compressed_only_where_the_kernel_is_truncated(tmp_path, dim):
+def test_a_stagnation_flow_changes_the_density_only_where_the_kernel_is_truncated(tmp_path, dim):
     """The continuity sum of the divergence-free flow u = a x, w = -a z (z up from the
     floor) on the initial lattice, reflective walls alone, no gravity: drho/dt / (rho0 a)
     is -(M_tt - M_nn) at a layer whose support the floor truncates, M the layer's second
