@@ -28,6 +28,7 @@ import numpy as np
 
 import sphcore.forces
 from sphcore import runner
+from sphcore.overrides import parse_set
 from sphcore.equations import sph_rates
 from sphcore.neighbours import neighbour_pairs
 from sphcore.simulation import Simulation
@@ -40,11 +41,11 @@ def frozen_pair_loop(sim, calls: int) -> tuple[float, int]:
     f, st = sim.forces, sim.state
     acc, drho = np.zeros_like(st.vel), np.zeros(st.n)
     src = f.sources()
-    grid = f.grid(src.pos, count=False)
+    view = f.pair_view(src)
     wall = f.wall_terms()
     f._buffers(st.n, src.pos.shape[0])
     n_src = src.pos.shape[0]
-    args = (st.n, src, grid.view, sim.params, f._L, wall, acc, drho, f._work[:n_src], f._spos[:n_src],
+    args = (st.n, src, view, sim.params, f._L, wall, acc, drho, f._work[:n_src], f._spos[:n_src],
             numba.get_num_threads())
     sph_rates(*args)
     times = []
@@ -53,7 +54,7 @@ def frozen_pair_loop(sim, calls: int) -> tuple[float, int]:
         for _ in range(calls):
             sph_rates(*args)
         times.append((time.perf_counter() - t) / calls)
-    pi, _ = neighbour_pairs(src.pos, grid.view, sim.params.support)
+    pi, _ = neighbour_pairs(src.pos, f.grid(src.pos, count=False).view, sim.params.support)
     return statistics.median(times), len(pi) // 2
 
 
@@ -81,7 +82,7 @@ def staged_steps(sim, steps: int) -> tuple[float, dict]:
 
     sphcore.forces.sph_rates = rates
     try:
-        timed(sim.forces, "grid", "neighbour grid")
+        timed(sim.forces, "pair_view", "neighbour search (grid or pair list)")
         timed(sim.integrator, "after_drift", "walls (sph_after_integrate)")
         timed(sim, "check", "checks")
         timed(sim, "choose_dt", "time step")
@@ -101,8 +102,10 @@ def main():
     ap.add_argument("--at", type=float, default=0.15, help="simulated time to run to first (s)")
     ap.add_argument("--calls", type=int, default=200, help="pair-loop calls per timing")
     ap.add_argument("--steps", type=int, default=1000, help="steps timed by stages")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="override a case option, as sph run --set does")
     args = ap.parse_args()
-    case, pm = runner.load(Path(args.case))
+    case, pm = runner.load(Path(args.case), [parse_set(s) for s in args.set])
     sim = Simulation(case, pm)
     while sim.t < args.at and not sim.done():
         sim.advance()

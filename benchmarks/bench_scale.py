@@ -59,7 +59,7 @@ def block_counts(n: int, dim: int) -> list[int]:
     return [side] * dim
 
 
-def write_case(directory: Path, n: int, dim: int, plugins: list[str], dx: float = 0.01) -> Path:
+def write_case(directory: Path, n: int, dim: int, plugins: list[str], dx: float = 0.01, skin=None) -> Path:
     count = block_counts(n, dim)
     up = 1  # y is up
     hi = [c * dx for c in count]
@@ -67,7 +67,8 @@ def write_case(directory: Path, n: int, dim: int, plugins: list[str], dx: float 
     gravity = [0.0, -9.81, 0.0][:dim]
     directory.mkdir(parents=True, exist_ok=True)
     (directory / "case.toml").write_text(CASE.format(dim=dim, lo=[0.0] * dim, hi=hi, count=count, dx=dx,
-                                                     gravity=gravity, plugins=json.dumps(plugins)))
+                                                     gravity=gravity, plugins=json.dumps(plugins))
+                                         + ("" if skin is None else f"[neighbours]\nskin = {skin}\n"))
     return directory
 
 
@@ -77,19 +78,19 @@ def _rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: kB
 
 
-def measure_one(n: int, dim: int, plugin: str, steps: int) -> dict:
+def measure_one(n: int, dim: int, plugin: str, steps: int, skin=None) -> dict:
     """In the child process: warm up on a tiny case, then time the real one."""
     from sphcore import runner
     from sphcore.simulation import Simulation
 
     with tempfile.TemporaryDirectory(prefix="sphscale") as tmp:
-        warm, _ = runner.load(write_case(Path(tmp) / "warm", 64, dim, PLUGINS[plugin]))
+        warm, _ = runner.load(write_case(Path(tmp) / "warm", 64, dim, PLUGINS[plugin], skin=skin))
         sim = Simulation(warm, _)
         for _ in range(2):
             sim.advance()
         del sim
         base = _rss_mb()
-        case, pm = runner.load(write_case(Path(tmp) / "real", n, dim, PLUGINS[plugin]))
+        case, pm = runner.load(write_case(Path(tmp) / "real", n, dim, PLUGINS[plugin], skin=skin))
         t0 = time.perf_counter()
         sim = Simulation(case, pm)
         sim.advance()
@@ -108,7 +109,7 @@ def measure_one(n: int, dim: int, plugin: str, steps: int) -> dict:
     return {"dim": dim, "n": sim.state.n, "plugin": plugin, "steps": steps, "wall_s": wall, "setup_s": setup,
             "psps": steps * sim.state.n / wall, "us": 1e6 * wall / (steps * sim.state.n), "peak_mb": peak,
             "base_mb": base, "mb_per_particle": (peak - base) / sim.state.n, "threads": numba.get_num_threads(),
-            "ghosts": int(getattr(sim, "n_sources", 0))}
+            "ghosts": int(getattr(sim, "n_sources", 0)), "list_builds": sim.counters.get("pair_list_builds", 0)}
 
 
 def steps_for(n: int, budget: float) -> int:
@@ -123,31 +124,34 @@ def main():
     ap.add_argument("--plugins", nargs="+", default=list(PLUGINS), choices=list(PLUGINS))
     ap.add_argument("--budget", type=float, default=2e6, help="particle-steps timed per row (steps = budget / n, "
                     "clamped to 5..2000)")
+    ap.add_argument("--skin", type=float, default=None, help="neighbours.skin of the case (default: sphcore's); "
+                    "in still water a kept pair list is built once, in a flow every few steps")
     ap.add_argument("--one", nargs=4, metavar=("N", "DIM", "PLUGIN", "STEPS"), help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.one:
         n, dim, plugin, steps = a.one
-        print(json.dumps(measure_one(int(n), int(dim), plugin, int(steps))))
+        print(json.dumps(measure_one(int(n), int(dim), plugin, int(steps), a.skin)))
         return
     rows = [(2, n) for n in a.sizes2d] + [(3, n) for n in a.sizes3d]
     threads = os.environ.get("NUMBA_NUM_THREADS", "default")
     print(f"full SPH step (neighbours, rates, leapfrog, plugins), still water in a box, dx = 0.01 m; "
           f"one process per row; {os.cpu_count()} cores, NUMBA_NUM_THREADS={threads}")
     head = (f"{'dim':>3} {'particles':>9} {'plugin':>10} {'steps':>5} {'particle-steps/s':>16} {'us/p-step':>9} "
-            f"{'ghosts':>7} {'peak RSS MB':>11} {'base MB':>7} {'kB/particle':>11} {'setup s':>7} {'load':>5}")
+            f"{'ghosts':>7} {'builds':>6} {'peak RSS MB':>11} {'base MB':>7} {'kB/particle':>11} {'setup s':>7} {'load':>5}")
     print(head)
     print("-" * len(head))
     for dim, n in rows:
         for plugin in a.plugins:
             steps = steps_for(n, a.budget)
             cmd = [sys.executable, __file__, "--one", str(n), str(dim), plugin, str(steps)]
+            cmd += [] if a.skin is None else ["--skin", str(a.skin)]
             proc = subprocess.run(cmd, capture_output=True, text=True)
             if proc.returncode != 0:
                 print(f"{dim:>3} {n:>9} {plugin:>10}  failed: {proc.stderr.strip().splitlines()[-1:]}", flush=True)
                 continue
             r = json.loads(proc.stdout.strip().splitlines()[-1])
             print(f"{r['dim']:>3} {r['n']:>9} {r['plugin']:>10} {r['steps']:>5} {r['psps']:>16.3e} {r['us']:>9.3f} "
-                  f"{r['ghosts']:>7} {r['peak_mb']:>11.0f} {r['base_mb']:>7.0f} {r['mb_per_particle'] * 1024:>11.3f}"
+                  f"{r['ghosts']:>7} {r['list_builds']:>6} {r['peak_mb']:>11.0f} {r['base_mb']:>7.0f} {r['mb_per_particle'] * 1024:>11.3f}"
                   f"{r['setup_s']:>7.2f} {os.getloadavg()[0]:>5.1f}", flush=True)
 
 

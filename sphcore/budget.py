@@ -117,7 +117,7 @@ def check_memory(case) -> None:
 def _rates_at_start(sim) -> tuple[float, float]:
     """(first step's size (s) as the run chooses it, largest |a| (m/s^2)): the rates at the
     initial state, then ``choose_dt``. Everything the evaluation touches is put back afterwards (particle
-    arrays in place, work arrays, statistics, counters), so the run that follows takes
+    arrays in place, work arrays, statistics, counters, the pair list), so the run that follows takes
     exactly the steps it would have taken without this look-ahead."""
     st, ctx, integ = sim.state, sim.ctx, sim.integrator
     saved_state = [(a, a.copy()) for _, a in st.arrays()]
@@ -150,6 +150,8 @@ def _rates_at_start(sim) -> tuple[float, float]:
         ctx.counters.clear()
         ctx.counters.update(counters)
         integ.fresh = fresh
+        if sim.forces.pairs is not None:
+            sim.forces.pairs.invalidate()  # the run builds its own pair list, as without this look-ahead
 
 
 def _binding_limit(sim, amax: float) -> str:

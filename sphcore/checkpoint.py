@@ -31,6 +31,9 @@ def save(sim, directory: Path, extra: dict | None = None) -> Path:
     rates = sim.integrator.checkpoint()
     arrays["acc"] = rates["acc"]
     arrays["drho"] = rates["drho"]
+    pairs = sim.forces.pairs
+    if pairs is not None and pairs.checkpoint() is not None:
+        arrays["pair_list_positions"] = pairs.checkpoint()  # the lists are rebuilt from these
     kept = {}
     for plugin, values in ctx._kept.items():
         kept[plugin] = {}
@@ -100,3 +103,5 @@ def restore_rates(sim, meta: dict, arrays: dict) -> None:
     """Put the checkpoint's rates into the integrator (after allocation), so the leapfrog
     continues exactly as the uninterrupted run would."""
     sim.integrator.restore({"acc": arrays["acc"], "drho": arrays.get("drho", np.zeros(0)), "fresh": meta["fresh"]})
+    if sim.forces.pairs is not None and "pair_list_positions" in arrays:
+        sim.forces.pairs.restore(arrays["pair_list_positions"])

@@ -96,6 +96,9 @@ CORE: dict[str, dict[str, O]] = {
     },
     "neighbours": {
         "sort_every": O(10, "int", doc="reorder particles by cell every N steps (memory locality)", positive=True),
+        "skin": O(0.3, "float", doc="keep each particle's pair candidates within (1 + skin) 2h and reuse them until "
+                  "a particle has moved skin h (Verlet lists; the same pairs, fewer searches); 0: search "
+                  "the cells at every force evaluation", min=0.0),
     },
     "parallel": {
         "threads": O(0, "int", doc="most threads to use; 0: as many as numba uses when the run starts "

@@ -47,7 +47,7 @@ from numba import njit, prange
 from .corrections import _corrected
 from .eos import _power
 from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
-from .neighbours import candidates_bound, forward_pairs, forward_rows, separation
+from .neighbours import candidates_bound, forward_pairs, forward_rows, listed_pairs, separation
 from .parallel import PARALLEL_MIN, twin
 from .wall_completion import _complete_at_wall
 
@@ -238,8 +238,10 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
     # store to acc/drho/work, which the compiler cannot prove do not alias it
     gv0, gv1, gv2 = gravity[0], gravity[1], gravity[2]
     order, cell_start = grid.order, grid.cell_start
+    pair_start, pair_cand = grid.pair_start, grid.pair_cand
+    use_list = pair_start.shape[0] > 0  # partners from a kept pair list, else from the cells
     for c in range(c_first, c_end):
-        nrows = forward_rows(c, grid, dim, rows)
+        nrows = 0 if use_list else forward_rows(c, grid, dim, rows)
         for k in range(cell_start[c], cell_start[c + 1]):
             i = order[k]
             di = i < n_dest
@@ -262,7 +264,11 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
             # particle i's velocity in scalars, loaded once (as gravity above)
             vi0, vi1 = vel[i, 0], vel[i, 1]
             vi2 = vel[i, 2] if dim == 3 else 0.0
-            for u in range(forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf)):
+            if use_list:
+                npart = listed_pairs(k, spos, order, pair_start, pair_cand, r2max, buf)
+            else:
+                npart = forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf)
+            for u in range(npart):
                 j = buf[u]
                 dj = j < n_dest
                 x0, x1, x2, r2 = separation(pos, i, j, dim)

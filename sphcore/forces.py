@@ -19,6 +19,7 @@ from .corrections import neighbour_sums
 from .equations import WORK_COLUMNS, Fields, WallTerms, sph_rates, uniform_acceleration
 from .errors import Instability
 from .neighbours import CellGrid
+from .pairlist import PairList
 
 
 class PressureField:
@@ -69,6 +70,8 @@ class Forces:
         self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
         self._L = np.zeros((1, 3, 3))
         self._grid = None
+        skin = ctx.case.config["neighbours"]["skin"] * ctx.params.support
+        self.pairs = PairList(ctx.params.support, skin) if skin > 0 and ctx.params.sph else None
         self._shepard = np.zeros(1)
         self._work = np.zeros((0, WORK_COLUMNS))
         self._spos = np.zeros((0, ctx.params.dim))
@@ -106,20 +109,37 @@ class Forces:
 
     def grid(self, pos, count=True) -> CellGrid:
         """The cell grid of ``pos``, rebuilt in the arrays of the last one (no allocation)."""
-        ctx = self.ctx
         try:
             if self._grid is None:
-                self._grid = CellGrid(pos, ctx.params.support)
+                self._grid = CellGrid(pos, self.ctx.params.support)
             else:
                 self._grid.rebuild(pos)
-            grid = self._grid
         except OverflowError as e:
-            far = int(np.argmax(np.abs(pos - np.median(pos, axis=0)).sum(axis=1)))
-            pid = int(ctx.state.id[far]) if far < ctx.state.n else -1
-            raise Instability(ctx.step, ctx.t, pid, f"neighbour search failed: {e}") from None
+            self._search_failed(pos, e)
         if count:
-            ctx.counters["neighbour_search"] += 1
-        return grid
+            self.ctx.counters["neighbour_search"] += 1
+        return self._grid
+
+    def pair_view(self, src: Fields):
+        """The grid view the pair loop walks: with a kept pair list (:mod:`sphcore.pairlist`,
+        ``neighbours.skin`` > 0) when the run has no plugin sources, else a fresh cell grid."""
+        if self.pairs is None or self.n_sources:
+            return self.grid(src.pos).view
+        try:
+            view, rebuilt = self.pairs.view_of(src.pos)
+        except OverflowError as e:
+            self._search_failed(src.pos, e)
+        counters = self.ctx.counters
+        counters["neighbour_search"] += 1
+        if rebuilt:
+            counters["pair_list_builds"] += 1
+        return view
+
+    def _search_failed(self, pos, e):
+        ctx = self.ctx
+        far = int(np.argmax(np.abs(pos - np.median(pos, axis=0)).sum(axis=1)))
+        pid = int(ctx.state.id[far]) if far < ctx.state.n else -1
+        raise Instability(ctx.step, ctx.t, pid, f"neighbour search failed: {e}") from None
 
     def wall_terms(self) -> WallTerms:
         """Per-particle wall terms from the plugins that supply them (``sph_wall_terms``)."""
@@ -159,14 +179,14 @@ class Forces:
         else:
             self.hook.sph_before_forces(ctx=ctx)
             src = self.sources()
-            grid = self.grid(src.pos)
+            view = self.pair_view(src)
             wall = self.wall_terms()
             self._buffers(st.n, src.pos.shape[0])
             if prm.kernel_gradient:
-                neighbour_sums(st.n, src, grid.view, prm, True, self._L, False, self._shepard)
+                neighbour_sums(st.n, src, view, prm, True, self._L, False, self._shepard)
                 counters["kernel_gradient_correction"] += 1
             n_src = src.pos.shape[0]
-            sph_rates(st.n, src, grid.view, prm, self._L, wall, acc, drho, self._work[:n_src], self._spos[:n_src],
+            sph_rates(st.n, src, view, prm, self._L, wall, acc, drho, self._work[:n_src], self._spos[:n_src],
                       numba.get_num_threads())
             counters["continuity"] += 1
             counters["momentum"] += 1

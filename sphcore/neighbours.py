@@ -55,7 +55,11 @@ class Grid(NamedTuple):
     ``order`` (n,) particle indices grouped by cell; ``cell_start`` (m + 1,) CSR offsets of
     the m occupied cells; ``pcell`` (n,) the occupied cell of each particle; ``nbr``
     (m, (2 reach + 1)**dim) occupied neighbour cells (-1: none); ``slab_start``
-    (nslab + 1,) cell offsets of the slabs of the pair loop.
+    (nslab + 1,) cell offsets of the slabs of the pair loop; ``pair_start`` (n + 1,) and
+    ``pair_cand`` (int32): the partner candidates of a kept pair list
+    (:class:`sphcore.pairlist.PairList`), those of the particle at cell-order index k being
+    ``pair_cand[pair_start[k]:pair_start[k + 1]]`` (cell-order indices); both empty for a
+    grid without one (the pair loop then walks the cells).
     """
 
     order: np.ndarray
@@ -63,6 +67,8 @@ class Grid(NamedTuple):
     pcell: np.ndarray
     nbr: np.ndarray
     slab_start: np.ndarray
+    pair_start: np.ndarray
+    pair_cand: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -170,6 +176,31 @@ def forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf):
     return kept
 
 
+@njit(cache=True, inline="always")
+def listed_pairs(k, spos, order, pair_start, pair_cand, r2max, buf):
+    """The partners j of particle i = order[k] from its kept candidates (a pair list of
+    :mod:`sphcore.pairlist`): those closer than sqrt(r2max) now, in the list's order, as
+    particle indices in ``buf[:count]``; returns the count. The same branch-free compaction
+    as :func:`forward_pairs`, over the candidates of a skin rather than of whole cells.
+    Lists are kept only for runs without plugin sources, so no pair of two sources occurs."""
+    dim = spos.shape[1]
+    p0 = spos[k, 0]
+    p1 = spos[k, 1]
+    p2 = spos[k, 2] if dim == 3 else 0.0
+    count = 0
+    for u in range(pair_start[k], pair_start[k + 1]):
+        k2 = pair_cand[u]
+        d0 = p0 - spos[k2, 0]
+        d1 = p1 - spos[k2, 1]
+        r2 = d0 * d0 + d1 * d1
+        if dim == 3:
+            d2 = p2 - spos[k2, 2]
+            r2 += d2 * d2
+        buf[count] = order[k2]
+        count += 1 if r2 < r2max else 0
+    return count
+
+
 @njit(cache=True)
 def candidates_bound(grid):
     """An upper bound on the partners :func:`forward_pairs` can return for one particle:
@@ -206,6 +237,7 @@ class CellGrid:
         self._nbr = np.empty((0, (2 * self.reach + 1) ** 3), np.int64)
         self._count = np.empty((1 << 16) + 2, np.int64)
         self._slab = np.empty(MAX_SLABS + 1, np.int64)
+        self._no_list = (np.empty(0, np.int64), np.empty(0, np.int32))
         self.lo = np.zeros(3)
         self._ncell = np.ones(3, np.int64)
         self._axes = np.zeros(3, np.int64)
@@ -230,7 +262,7 @@ class CellGrid:
         self.cell_key, self.cell_start, self.nbr = self._cell_key[:m], self._start[:m + 1], self._nbr[:m]
         (_table_parallel if m > PARALLEL_CELLS else _table_serial)(self.cell_key, m, ncell, dim, self.reach, self.nbr)
         self.slab_start = self._slab[:nslab + 1]
-        self.view = Grid(self.order, self.cell_start, self.pcell, self.nbr, self.slab_start)
+        self.view = Grid(self.order, self.cell_start, self.pcell, self.nbr, self.slab_start, *self._no_list)
         return self
 
 

@@ -190,9 +190,20 @@ class Simulation:
 
     def reorder(self):
         """Sort particles by cell so that neighbours are near in memory (ids keep identity)."""
-        order = self.forces.grid(self.state.pos, count=False).order
+        pairs = self.forces.pairs
+        if pairs is not None and pairs.ready(self.state.pos):
+            if pairs.sorted:  # in the list's order since its build: nothing to do
+                return
+            order = pairs.view.order  # the kept pair list's cell order: the list stays valid
+        else:
+            order = self.forces.grid(self.state.pos, count=False).order
+            pairs = None
         self.state.permute(order)
         self.integrator.permute(order)
+        if pairs is not None:
+            pairs.follow(order)
+        elif self.forces.pairs is not None:
+            self.forces.pairs.invalidate()  # the lists hold particle indices
         self.update_pressure()  # derived arrays (modified pressure) follow the new order
         self.counters["reorder"] += 1
 
