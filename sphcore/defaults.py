@@ -95,8 +95,9 @@ CORE: dict[str, dict[str, O]] = {
                            "plugin adds accelerations (it may do work)", min=0.0),
     },
     "neighbours": {
-        "sort_every": O(10, "int", doc="reorder particles by cell every N steps (memory locality)", positive=True),
-        "skin": O(0.3, "float", doc="keep each particle's pair candidates within (1 + skin) 2h and reuse them until "
+        "sort_every": O(10, "int", doc="reorder particles by cell every N steps (memory locality; with a kept "
+                        "pair list only if it was rebuilt since the last reorder)", positive=True),
+        "skin": O(0.2, "float", doc="keep each particle's pair candidates within (1 + skin) 2h and reuse them until "
                   "a particle has moved skin h (Verlet lists; the same pairs, fewer searches); 0: search "
                   "the cells at every force evaluation", min=0.0),
     },

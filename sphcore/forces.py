@@ -71,7 +71,9 @@ class Forces:
         self._L = np.zeros((1, 3, 3))
         self._grid = None
         skin = ctx.case.config["neighbours"]["skin"] * ctx.params.support
-        self.pairs = PairList(ctx.params.support, skin) if skin > 0 and ctx.params.sph else None
+        # plugin sources (ghosts) change every step: such runs walk the cells at every evaluation
+        keep = skin > 0 and ctx.params.sph and "sph_extra_sources" not in hook.implemented
+        self.pairs = PairList(ctx.params.support, skin) if keep else None
         self._shepard = np.zeros(1)
         self._work = np.zeros((0, WORK_COLUMNS))
         self._spos = np.zeros((0, ctx.params.dim))
@@ -134,6 +136,25 @@ class Forces:
         if rebuilt:
             counters["pair_list_builds"] += 1
         return view
+
+    def reorder_plan(self, pos):
+        """The permutation that puts the particles in cell order (new index k = old index
+        ``order[k]``), or None when they are in it already: the kept pair list's order (the
+        list stays valid, see :meth:`sphcore.pairlist.PairList.follow`), else a fresh grid's."""
+        if self.pairs is None:
+            return self.grid(pos, count=False).order
+        try:
+            view, rebuilt = self.pairs.view_of(pos)
+        except OverflowError as e:
+            self._search_failed(pos, e)
+        if rebuilt:
+            self.ctx.counters["pair_list_builds"] += 1
+        return None if self.pairs.sorted else view.order
+
+    def reordered(self, order):
+        """The particles were permuted by ``order`` (from :meth:`reorder_plan`)."""
+        if self.pairs is not None:
+            self.pairs.follow(order)
 
     def _search_failed(self, pos, e):
         ctx = self.ctx

@@ -9,9 +9,9 @@ for every particle, the forward candidates closer than 2h + s (CSR, cell-order i
 in the order of the cell walk). While every particle is within s/2 of where it was at the
 build, every pair closer than 2h now was closer than 2h + s then (two particles close in
 by at most s), so the pair loop tests only the stored candidates
-(:func:`sphcore.neighbours.listed_pairs`: (1 + s / 2h)^dim candidates per partner at most,
-1.21 in 2D for s = 0.1 (2h)) and the grid is not rebuilt (Verlet 1967; Allen & Tildesley,
-*Computer Simulation of Liquids*, 2nd ed. 2017, section 5.3.1).
+(:func:`sphcore.neighbours.listed_pairs`; (1 + s / 2h)^dim candidates per partner at most,
+1.44 in 2D and 1.73 in 3D for the default s = 0.2 (2h)) and no grid is built (Verlet 1967;
+Allen & Tildesley, *Computer Simulation of Liquids*, 2nd ed. 2017, section 5.3.1).
 
 Why it keeps the results exact: a listed pair beyond 2h is not a partner (the distance
 test is the one of the walk), and every partner is listed; only the order of a particle's
@@ -22,9 +22,10 @@ schedule (see :mod:`sphcore.neighbours`) holds as long as the list is kept, sinc
 written in particle indices. A restart rebuilds the list from the positions of the last
 build (saved in the checkpoint), so it continues bit for bit.
 
-The rule to rebuild is geometric only (any particle more than s/2 from its position at
-the build; another particle count; the particles reordered), so anything that moves
-particles (the integrator, a wall's reflection, a plugin) keeps the lists valid. Runs with
+The rule to rebuild is geometric only (a particle more than s/2 from its position at the
+build, or another particle count), so anything that moves particles (the integrator, a
+wall's reflection, a plugin) keeps the lists valid; the core's reorder puts the particles
+in the list's own cell order (:meth:`PairList.follow`), which the list survives. Runs with
 plugin source particles (ghosts, whose set changes every step) walk the cells instead.
 """
 

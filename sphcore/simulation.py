@@ -189,21 +189,14 @@ class Simulation:
         self.pressure.update(self.ctx.state, self.ctx.counters)
 
     def reorder(self):
-        """Sort particles by cell so that neighbours are near in memory (ids keep identity)."""
-        pairs = self.forces.pairs
-        if pairs is not None and pairs.ready(self.state.pos):
-            if pairs.sorted:  # in the list's order since its build: nothing to do
-                return
-            order = pairs.view.order  # the kept pair list's cell order: the list stays valid
-        else:
-            order = self.forces.grid(self.state.pos, count=False).order
-            pairs = None
+        """Sort particles by cell so that neighbours are near in memory (ids keep identity);
+        nothing to do when they are in the kept pair list's order already."""
+        order = self.forces.reorder_plan(self.state.pos)
+        if order is None:
+            return
         self.state.permute(order)
         self.integrator.permute(order)
-        if pairs is not None:
-            pairs.follow(order)
-        elif self.forces.pairs is not None:
-            self.forces.pairs.invalidate()  # the lists hold particle indices
+        self.forces.reordered(order)
         self.update_pressure()  # derived arrays (modified pressure) follow the new order
         self.counters["reorder"] += 1
 
