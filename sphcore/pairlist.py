@@ -35,7 +35,9 @@ import numpy as np
 from numba import prange
 
 from .neighbours import CellGrid, Grid, forward_rows
-from .parallel import by_size
+from .parallel import by_size, serial_and_parallel
+
+BUILD_PARALLEL_MIN = 1000  # particles: the list build runs parallel from here
 
 
 def _moved(pos, ref, limit2):
@@ -52,7 +54,7 @@ def _moved(pos, ref, limit2):
     return far
 
 
-def _candidates(spos, grid, r2, start, cand, fill):
+def _find_candidates(spos, grid, r2, start, cand, fill):
     """Per particle (cell-order index k) its forward candidates closer than sqrt(r2):
     their count in ``start[k + 1]`` (``fill`` false), or (``fill`` true, ``start`` the CSR
     offsets from the counts) the candidates themselves in ``cand[start[k]:start[k + 1]]``,
@@ -91,7 +93,16 @@ def _candidates(spos, grid, r2, start, cand, fill):
 
 
 _moved = by_size(_moved)
-_candidates = by_size(_candidates)
+# the build tests every candidate of the cells of side 2h + s, twice (count, fill): work per
+# particle like the pair loop's, so parallel from the same size, not from the element-wise
+# passes' PARALLEL_MIN
+_candidates_serial, _candidates_parallel = serial_and_parallel(_find_candidates)
+
+
+def _candidates(spos, grid, r2, start, cand, fill):
+    """:func:`_find_candidates`, parallel from BUILD_PARALLEL_MIN particles."""
+    kernel = _candidates_parallel if spos.shape[0] >= BUILD_PARALLEL_MIN else _candidates_serial
+    kernel(spos, grid, r2, start, cand, fill)
 
 
 class PairList:
