@@ -182,7 +182,10 @@ def listed_pairs(k, spos, order, pair_start, pair_cand, r2max, buf):
     :mod:`sphcore.pairlist`): those closer than sqrt(r2max) now, in the list's order, as
     particle indices in ``buf[:count]``; returns the count. The same branch-free compaction
     as :func:`forward_pairs`, over the candidates of a skin rather than of whole cells.
-    Lists are kept only for runs without plugin sources, so no pair of two sources occurs."""
+    Lists are kept only for runs without plugin sources, so no pair of two sources occurs.
+    The distance test is written out here as in :func:`forward_pairs`: one inline helper
+    for both made this loop 20 % slower (PySPH's dam break, one thread, frozen state: 0.264
+    -> 0.313-0.318 ms a call, ``benchmarks/bench_pairs.py``)."""
     dim = spos.shape[1]
     p0 = spos[k, 0]
     p1 = spos[k, 1]
