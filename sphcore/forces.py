@@ -127,15 +127,8 @@ class Forces:
         ``neighbours.skin`` > 0) when the run has no plugin sources, else a fresh cell grid."""
         if self.pairs is None or self.n_sources:
             return self.grid(src.pos).view
-        try:
-            view, rebuilt = self.pairs.view_of(src.pos)
-        except OverflowError as e:
-            self._search_failed(src.pos, e)
-        counters = self.ctx.counters
-        counters["neighbour_search"] += 1
-        if rebuilt:
-            counters["pair_list_builds"] += 1
-        return view
+        self.ctx.counters["neighbour_search"] += 1
+        return self._kept_view(src.pos)
 
     def reorder_plan(self, pos):
         """The permutation that puts the particles in cell order (new index k = old index
@@ -143,13 +136,18 @@ class Forces:
         list stays valid, see :meth:`sphcore.pairlist.PairList.follow`), else a fresh grid's."""
         if self.pairs is None:
             return self.grid(pos, count=False).order
+        view = self._kept_view(pos)
+        return None if self.pairs.sorted else view.order
+
+    def _kept_view(self, pos):
+        """The kept pair list's view of ``pos`` (rebuilt when due, counted)."""
         try:
             view, rebuilt = self.pairs.view_of(pos)
         except OverflowError as e:
             self._search_failed(pos, e)
         if rebuilt:
             self.ctx.counters["pair_list_builds"] += 1
-        return None if self.pairs.sorted else view.order
+        return view
 
     def reordered(self, order):
         """The particles were permuted by ``order`` (from :meth:`reorder_plan`)."""
