@@ -43,10 +43,23 @@ def _params(tmp_path, dim, dx=0.02):
                         kernel_gradient=False, modified_pressure=False)
 
 
-def _rates(src, view, prm):
+def _walls(n, dim, seed, active):
+    """Wall terms on about 40 % of the particles (random), as tests/test_core_pairs.py: their
+    near-wall sums are accumulated from both sides of each pair; or none."""
+    if not active:
+        return WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)), np.zeros(n),
+                         False)
+    rng = np.random.default_rng(seed)
+    share = np.where(rng.uniform(0, 1, n) < 0.4, rng.uniform(0.01, 0.3, n), 0.0)
+    e = rng.normal(size=(n, dim))
+    e /= np.linalg.norm(e, axis=1)[:, None]
+    return WallTerms(share, rng.normal(0, 50.0, (n, dim)), rng.normal(0, 1.0, (n, dim)),
+                     np.einsum("ni,nj->nij", e, e), rng.uniform(0.5, 1.5, n), True)
+
+
+def _rates(src, view, prm, wall=None):
     n, dim = src.pos.shape
-    wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)), np.zeros(n),
-                     False)
+    wall = wall if wall is not None else _walls(n, dim, 0, False)
     acc, drho = np.zeros((n, dim)), np.zeros(n)
     sph_rates(n, src, view, prm, np.zeros((1, 3, 3)), wall, acc, drho, np.zeros((n, WORK_COLUMNS)),
               np.zeros_like(src.pos), numba.get_num_threads())
@@ -54,8 +67,9 @@ def _rates(src, view, prm):
 
 
 @pytest.mark.parametrize("dim", [2, 3])
-def test_a_kept_list_gives_the_rates_of_a_fresh_walk_until_half_the_skin(tmp_path, dim):
-    prm = _params(tmp_path, dim)
+@pytest.mark.parametrize("walls", [False, True])
+def test_a_kept_list_gives_the_rates_of_a_fresh_walk_until_half_the_skin(tmp_path, dim, walls):
+    prm = _params(tmp_path, dim)._replace(moment_norm=0.97, rho_ref=1000.0)
     rng, src = _cloud(dim, 14 if dim == 2 else 7, 5 + dim)
     skin = 0.3 * prm.support
     pairs = PairList(prm.support, skin)
@@ -67,8 +81,9 @@ def test_a_kept_list_gives_the_rates_of_a_fresh_walk_until_half_the_skin(tmp_pat
     moved = src._replace(pos=np.ascontiguousarray(src.pos + step))
     view, rebuilt = pairs.view_of(moved.pos)
     assert not rebuilt  # the list is kept
-    acc, drho = _rates(moved, view, prm)
-    ref_acc, ref_drho = _rates(moved, CellGrid(moved.pos, prm.support).view, prm)
+    wall = _walls(moved.pos.shape[0], dim, 1, walls)
+    acc, drho = _rates(moved, view, prm, wall)
+    ref_acc, ref_drho = _rates(moved, CellGrid(moved.pos, prm.support).view, prm, wall)
     assert np.abs(acc - ref_acc).max() <= 1e-12 * np.abs(ref_acc).max()
     assert np.abs(drho - ref_drho).max() <= 1e-12 * np.abs(ref_drho).max()
     # one particle beyond half the skin: rebuilt
