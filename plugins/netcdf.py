@@ -238,7 +238,13 @@ class NetcdfWriter(ScheduledWriter):
         if ctx.output_dir is None or not path.exists():
             return  # nothing written before: the first frame creates the file
         try:
+            if path.stat().st_size == 0:
+                return  # killed right after creating it: the first frame writes it anew
             with netCDF4.Dataset(path) as src:
+                if not set(FRAME_VARS) | set(STATIC_VARS) <= set(src.variables):
+                    # killed while its header was written (the first frame's _create, synced
+                    # before any frame): it holds no frame; this run's first frame writes it anew
+                    return
                 src.set_auto_maskandscale(False)
                 steps, times = src["step"][:], src["time"][:]
             # frames to keep: the leading ones up to the restart step (a NaN time marks

@@ -217,6 +217,28 @@ def test_restart_drops_later_frames_and_appends(tmp_path, output_at_restart_step
         assert ds.sizes["particle"] == sim.state.n
 
 
+@pytest.mark.parametrize("cut", ["empty", "attributes only", "dimensions only"])
+def test_restart_after_a_kill_while_the_header_was_written(tmp_path, cut):
+    """A run killed inside its first frame's header leaves a particles.nc with no frame (its
+    checkpoint is the one before any frame): the restart writes the file anew, every frame."""
+    sim, rng = make_sim(tmp_path, every_steps=2)
+    path = sim.output_dir / "particles.nc"
+    if cut == "empty":
+        path.write_bytes(b"")
+    else:
+        with netCDF4.Dataset(path, "w", format="NETCDF3_64BIT_DATA") as ds:
+            ds.title = "cut"
+            if cut == "dimensions only":
+                ds.createDimension("particle", sim.state.n)
+                ds.createDimension("time", None)
+    sim.restarting = True
+    frames = run(sim, rng, configured(sim), steps=5)
+    assert [f["step"] for f in frames] == [0, 2, 4, 5]
+    with xr.open_dataset(path) as ds:
+        for name in ("time", "step", "position", "velocity", "density", "pressure"):
+            assert np.array_equal(ds[name].values, stacked(frames, name)), name
+
+
 def test_killed_run_keeps_synced_frames(tmp_path):
     sim, _ = make_sim(tmp_path)
     child = textwrap.dedent("""

@@ -193,6 +193,25 @@ def test_restart_trims_samples_after_the_checkpoint_and_continues_identically(tm
     np.testing.assert_array_equal(full, part)
 
 
+@pytest.mark.parametrize("cut", ["empty", "attributes only", "some variables"])
+def test_a_probe_file_cut_while_its_header_was_written_is_written_anew(tmp_path, cut):
+    """A run killed inside its first sample's header leaves probes.nc without samples: the
+    restart treats it as absent (its first sample writes the file anew) instead of failing."""
+    from sphcore_plugins.probes.store import FILE_NAME, ProbeFile
+
+    path = tmp_path / FILE_NAME
+    if cut == "empty":
+        path.write_bytes(b"")
+    else:
+        with netCDF4.Dataset(path, "w", format="NETCDF3_64BIT_DATA") as ds:
+            ds.title = "cut"
+            if cut == "some variables":
+                ds.createDimension("time", None)
+                ds.createVariable("time", "f8", ("time",))
+                ds.createVariable("step", "i8", ("time",))
+    assert ProbeFile(tmp_path).reopen(10) is None
+
+
 def test_probes_without_output_directory_still_summarise(tmp_path):
     sim = make_sim(tiny(tmp_path, t_end=0.01))
     plugin = sim.pm.get_plugin("probes")

@@ -26,6 +26,9 @@ FILE_NAME = "probes.nc"
 CSV_NAME = "probes.csv"
 KIND_CODES = {"pressure": 0, "depth": 1}
 MODE_CODES = {"": -1, "wall": 0, "particle": 1}
+#: every variable the header defines (a file without all of them was cut while its header was written)
+HEADER_VARS = {"time", "step", "pressure", "depth", "dry", "probe_name", "probe_reference", "probe_kind",
+               "probe_mode", "probe_start", "probe_end", "probe_points", "probe_H"}
 
 
 def _chars(names):
@@ -118,7 +121,11 @@ class ProbeFile:
         if not self.path.exists():
             return None
         try:
+            if self.path.stat().st_size == 0:
+                return None  # killed right after creating it: the first sample writes it anew
             with netCDF4.Dataset(self.path) as src:
+                if not HEADER_VARS <= set(src.variables):
+                    return None  # killed while its header was written (no sample yet): written anew
                 src.set_auto_maskandscale(False)
                 steps, times = src["step"][:], src["time"][:]
             ok = np.isfinite(times) & (steps <= last_step)
