@@ -238,13 +238,9 @@ class NetcdfWriter(ScheduledWriter):
         if ctx.output_dir is None or not path.exists():
             return  # nothing written before: the first frame creates the file
         try:
-            if path.stat().st_size == 0:
-                return  # killed right after creating it: the first frame writes it anew
+            if header_cut(path, set(FRAME_VARS) | set(STATIC_VARS)):
+                return  # no frame in it: this run's first frame writes it anew
             with netCDF4.Dataset(path) as src:
-                if not set(FRAME_VARS) | set(STATIC_VARS) <= set(src.variables):
-                    # killed while its header was written (the first frame's _create, synced
-                    # before any frame): it holds no frame; this run's first frame writes it anew
-                    return
                 src.set_auto_maskandscale(False)
                 steps, times = src["step"][:], src["time"][:]
             # frames to keep: the leading ones up to the restart step (a NaN time marks
@@ -262,6 +258,17 @@ class NetcdfWriter(ScheduledWriter):
         if keep:
             t_last = float(times[keep - 1])
             self.schedule.resume(t_last, int(steps[keep - 1]) if steps[keep - 1] == ctx.step else None)
+
+
+def header_cut(path: Path, names) -> bool:
+    """Was the file cut while its header was written (a run killed inside its first frame's
+    create, which syncs the whole header before any frame): empty, or without every one of
+    the variables ``names``? Such a file holds no frame; a restart writes it anew."""
+    import netCDF4
+    if path.stat().st_size == 0:
+        return True
+    with netCDF4.Dataset(path) as src:
+        return not set(names) <= set(src.variables)
 
 
 def _rewrite_first(path: Path, keep: int) -> None:

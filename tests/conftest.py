@@ -55,6 +55,20 @@ def run_to_end(sim: Simulation, max_steps: int = 100_000) -> list[float]:
     return dts
 
 
+def write_cut_netcdf(path: Path, cut: str, build=None) -> None:
+    """A netCDF file as a run killed inside its header leaves it: ``cut`` "empty" (no byte),
+    else global attributes only, plus what ``build(ds)`` defines (some of the header)."""
+    import netCDF4
+
+    if cut == "empty":
+        path.write_bytes(b"")
+        return
+    with netCDF4.Dataset(path, "w", format="NETCDF3_64BIT_DATA") as ds:
+        ds.title = "cut"
+        if build is not None:
+            build(ds)
+
+
 def by_id(state) -> dict[str, np.ndarray]:
     """Every particle array of a state, ordered by particle id."""
     order = np.argsort(state.id, kind="stable")

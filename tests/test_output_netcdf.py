@@ -10,6 +10,7 @@ import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import write_cut_netcdf
 
 from sphcore.errors import CaseError, OutputError
 from sphcore.particles import FLUID, SPHERE, lattice, make_block
@@ -223,14 +224,12 @@ def test_restart_after_a_kill_while_the_header_was_written(tmp_path, cut):
     checkpoint is the one before any frame): the restart writes the file anew, every frame."""
     sim, rng = make_sim(tmp_path, every_steps=2)
     path = sim.output_dir / "particles.nc"
-    if cut == "empty":
-        path.write_bytes(b"")
-    else:
-        with netCDF4.Dataset(path, "w", format="NETCDF3_64BIT_DATA") as ds:
-            ds.title = "cut"
-            if cut == "dimensions only":
-                ds.createDimension("particle", sim.state.n)
-                ds.createDimension("time", None)
+
+    def dimensions(ds):
+        ds.createDimension("particle", sim.state.n)
+        ds.createDimension("time", None)
+
+    write_cut_netcdf(path, cut, dimensions if cut == "dimensions only" else None)
     sim.restarting = True
     frames = run(sim, rng, configured(sim), steps=5)
     assert [f["step"] for f in frames] == [0, 2, 4, 5]

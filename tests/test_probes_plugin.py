@@ -12,7 +12,7 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 import pytest
-from conftest import make_sim, write_case
+from conftest import make_sim, write_case, write_cut_netcdf
 
 from sphcore import cli, runner
 from sphcore.errors import CaseError
@@ -199,16 +199,12 @@ def test_a_probe_file_cut_while_its_header_was_written_is_written_anew(tmp_path,
     restart treats it as absent (its first sample writes the file anew) instead of failing."""
     from sphcore_plugins.probes.store import FILE_NAME, ProbeFile
 
-    path = tmp_path / FILE_NAME
-    if cut == "empty":
-        path.write_bytes(b"")
-    else:
-        with netCDF4.Dataset(path, "w", format="NETCDF3_64BIT_DATA") as ds:
-            ds.title = "cut"
-            if cut == "some variables":
-                ds.createDimension("time", None)
-                ds.createVariable("time", "f8", ("time",))
-                ds.createVariable("step", "i8", ("time",))
+    def some_variables(ds):
+        ds.createDimension("time", None)
+        ds.createVariable("time", "f8", ("time",))
+        ds.createVariable("step", "i8", ("time",))
+
+    write_cut_netcdf(tmp_path / FILE_NAME, cut, some_variables if cut == "some variables" else None)
     assert ProbeFile(tmp_path).reopen(10) is None
 
 

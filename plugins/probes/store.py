@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sphcore_plugins.netcdf import _fail, _rewrite_first, case_attributes, new_dataset
+from sphcore_plugins.netcdf import _fail, _rewrite_first, case_attributes, header_cut, new_dataset
 
 if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
     import netCDF4
@@ -121,11 +121,9 @@ class ProbeFile:
         if not self.path.exists():
             return None
         try:
-            if self.path.stat().st_size == 0:
-                return None  # killed right after creating it: the first sample writes it anew
+            if header_cut(self.path, HEADER_VARS):
+                return None  # no sample in it: the first sample writes it anew
             with netCDF4.Dataset(self.path) as src:
-                if not HEADER_VARS <= set(src.variables):
-                    return None  # killed while its header was written (no sample yet): written anew
                 src.set_auto_maskandscale(False)
                 steps, times = src["step"][:], src["time"][:]
             ok = np.isfinite(times) & (steps <= last_step)
