@@ -1,0 +1,96 @@
+"""A tank at rest, linearised: growth rates, the acoustic quarter wave and the sloshing mode.
+
+    python postprocessing/rest_stability.py [--h 1.3 1.5 1.7 1.9 2.0] [--size 0.4 0.4]
+        [--boundary wall_model ghosts reflective] [--set KEY=VALUE ...] [--jitter A --run T]
+
+Builds ``cases/hydrostatic_tank`` with plain Tait pressure (no modified pressure), its block
+cut to ``--size`` (width, depth in m; the default 20 x 20 particles keeps each row to a few
+seconds), and for every smoothing length and boundary linearises the rates about the
+hydrostatic start (:mod:`sphcore.linearised`). Prints
+
+- the largest growth rate Re lambda (1/s; > 0: the rest state is unstable and any
+  disturbance, round-off included, grows as exp(Re lambda t)) and where that mode's
+  displacement is largest (column, row of the initial lattice from the lower left);
+- the quarter-wave acoustic mode of the column (density ~ cos(pi z / 2H)) against
+  omega = pi c0 / (2 H), and the depth the scheme behaves as if it had, pi c0 / (2 omega):
+  its excess over H, in dx, is how far below the floor the scheme's wall acts;
+- the first sloshing mode (velocity of the linear wave potential cos(k x) cosh(k z),
+  k = pi / L) against omega^2 = g k tanh(k H), with its damping (the artificial viscosity).
+
+With ``--jitter A --run T`` each tank is also run for T seconds from its start with every
+position moved by a random amount of up to A dx (seeded), and the largest displacement from
+the unmoved lattice printed every 0.5 s: an unstable rest state shows its growth from a
+disturbance the exact lattice does not have (a run from the exact lattice may stay put by
+symmetry alone).
+
+Figures are printed, never asserted (``tests/test_rest_linearised.py`` asserts the known
+answers); docs/wall_pressure.md ("The tank at rest, linearised") has a table from this
+script.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from sphcore import runner
+from sphcore.linearised import column_at_rest
+from sphcore.overrides import parse_set
+from sphcore.simulation import Simulation
+
+ROOT = Path(__file__).resolve().parent.parent
+BOUNDARIES = {"wall_model": '["reflective","wall_integral"]', "ghosts": '["ghost","reflective"]',
+              "reflective": '["reflective"]'}
+
+
+def tank(h: float, boundary: str, size=(0.4, 0.4), sets=(), case_dir=ROOT / "cases" / "hydrostatic_tank"):
+    """A Simulation of the plain-Tait tank at rest (hydrostatic start), block cut to ``size``."""
+    w, d = size
+    over = ["physics.modified_pressure=false", f"kernel.h_over_dx={h}", f"plugins.use={BOUNDARIES[boundary]}",
+            f"domain.max=[{w},{1.5 * d}]", f"blocks[0].max=[{w},{d}]", *sets]
+    case, pm = runner.load(case_dir, [parse_set(s) for s in over])
+    return Simulation(case, pm)
+
+
+def jittered_run(sim, amp: float, t_end: float, every: float = 0.5):
+    """Run ``sim`` for ``t_end`` s from its start moved by up to ``amp`` dx; print the
+    largest displacement (dx) from the unmoved start every ``every`` s."""
+    st, dx = sim.state, sim.case.dx
+    start = dict(zip(st.id.tolist(), st.pos.copy()))
+    st.pos += amp * dx * np.random.default_rng(1).uniform(-1.0, 1.0, st.pos.shape)
+    line, mark = [], every
+    while sim.t < t_end - 1e-12:
+        sim.advance()
+        if sim.t >= mark - 1e-12:
+            ref = np.array([start[i] for i in st.id.tolist()])
+            line.append(f"{np.linalg.norm(st.pos - ref, axis=1).max() / dx:.3g}")
+            mark += every
+    print(f"      largest displacement (dx) every {every} s from a {amp:g} dx jitter: {' '.join(line)}", flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--h", type=float, nargs="+", default=[1.3, 1.5, 1.7, 1.9, 2.0], help="h / dx")
+    ap.add_argument("--size", type=float, nargs=2, default=[0.4, 0.4], metavar=("WIDTH", "DEPTH"))
+    ap.add_argument("--boundary", nargs="+", default=list(BOUNDARIES), choices=list(BOUNDARIES))
+    ap.add_argument("--set", action="append", default=[], help="more case overrides, as sph run --set")
+    ap.add_argument("--jitter", type=float, default=0.0, help="with --run: random start offsets, up to this many dx")
+    ap.add_argument("--run", type=float, default=0.0, help="also run each tank this many seconds (s)")
+    a = ap.parse_args()
+    print(f"plain-Tait tank at rest, {a.size[0]} m x {a.size[1]} m; omega in rad/s")
+    print(f"{'h/dx':>5} {'boundary':>11} {'growth 1/s':>11} {'where':>9} {'acoustic':>9} {'fit':>5} {'theory':>8} "
+          f"{'wall offset':>11} {'sloshing':>9} {'theory':>7} {'damping':>8}")
+    for h in a.h:
+        for name in a.boundary:
+            r = column_at_rest(tank(h, name, a.size, a.set))
+            print(f"{h:>5} {name:>11} {r['growth']:>+11.3g} {str(r['where']):>9} {r['acoustic']:>9.2f} {r['acoustic_fit']:>5.3f} "
+                  f"{r['acoustic_theory']:>8.2f} {r['wall_offset_dx']:>+9.2f}dx {r['slosh']:>9.3f} "
+                  f"{r['slosh_theory']:>7.3f} {r['slosh_damping']:>8.3f}", flush=True)
+            if a.run > 0:
+                jittered_run(tank(h, name, a.size, a.set), a.jitter, a.run)
+
+
+if __name__ == "__main__":
+    main()
