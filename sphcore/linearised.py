@@ -98,7 +98,8 @@ def modes(jac: np.ndarray):
 def mode_like(values, vectors, shape: np.ndarray, part: slice) -> tuple[complex, float]:
     """The oscillating mode (Im lambda > 0) whose eigenvector, restricted to ``part`` of the
     state (a slice from :func:`blocks`), is most nearly parallel to ``shape``; returns its
-    eigenvalue and the cosine of the angle between the two (1: the same shape)."""
+    eigenvalue and the cosine of the angle between the two (1: the same shape; -1 when no
+    mode oscillates)."""
     s = shape / np.linalg.norm(shape)
     sub = vectors[part, :]
     norms = np.linalg.norm(sub, axis=0)
@@ -117,6 +118,8 @@ def column_at_rest(sim) -> dict:
     sloshing mode's omega and damping against sqrt(g k tanh(k H)) with its fit."""
     st, prm, dx = sim.state, sim.params, sim.case.dx
     n, dim = st.n, prm.dim
+    if dim != 2:
+        raise ValueError(f"column_at_rest takes a 2D case (x along the tank, z up); this one has dim = {dim}")
     values, vectors = modes(rate_jacobian(sim))
     b = blocks(n, dim)
     x0 = st.pos[:, 0] - (st.pos[:, 0].min() - dx / 2)
