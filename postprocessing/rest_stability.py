@@ -1,13 +1,17 @@
 """A tank at rest, linearised: growth rates, the acoustic quarter wave and the sloshing mode.
 
-    python postprocessing/rest_stability.py [--h 1.3 1.5 1.7 1.9 2.0] [--size 0.4 0.4]
+    python postprocessing/rest_stability.py [--h 1.3 1.5 1.7 1.9 2.0] [--size 0.4 0.4] [--span S]
         [--boundary wall_model ghosts reflective] [--set KEY=VALUE ...] [--jitter A --run T]
         [--no-modes]
 
 Builds ``cases/hydrostatic_tank`` with plain Tait pressure (no modified pressure), its block
 cut to ``--size`` (width, depth in m; the default 20 x 20 particles keeps each row to a few
-seconds), and for every smoothing length and boundary linearises the rates about the
-hydrostatic start (:mod:`sphcore.linearised`). Prints
+seconds; ``--span`` makes it a 3D tank that deep across), and for every smoothing length and
+boundary linearises the rates about the hydrostatic start (:mod:`sphcore.linearised`). Keep
+the width and the span above 4h + 2 dx: in a narrower channel particles reach two opposite
+walls, where the wall model adds the two walls' single-wall lattice errors (an
+approximation: 0.026 g sideways 7 dx under the surface at h = 2 dx in a channel 6 dx
+across), and the figures then describe the channel, not the walls. Prints
 
 - the largest growth rate Re lambda (1/s; > 0: the rest state is unstable and any
   disturbance, round-off included, grows as exp(Re lambda t)) and where that mode's
@@ -47,11 +51,17 @@ BOUNDARIES = {"wall_model": '["reflective","wall_integral"]', "ghosts": '["ghost
               "reflective": '["reflective"]'}
 
 
-def tank(h: float, boundary: str, size=(0.4, 0.4), sets=(), case_dir=ROOT / "cases" / "hydrostatic_tank"):
-    """A Simulation of the plain-Tait tank at rest (hydrostatic start), block cut to ``size``."""
+def tank(h: float, boundary: str, size=(0.4, 0.4), sets=(), span=None, case_dir=ROOT / "cases" / "hydrostatic_tank"):
+    """A Simulation of the plain-Tait tank at rest (hydrostatic start), block cut to ``size``
+    (width, depth); with ``span`` a 3D tank that deep across (the third axis; y is up)."""
     w, d = size
-    over = ["physics.modified_pressure=false", f"kernel.h_over_dx={h}", f"plugins.use={BOUNDARIES[boundary]}",
-            f"domain.max=[{w},{1.5 * d}]", f"blocks[0].max=[{w},{d}]", *sets]
+    over = ["physics.modified_pressure=false", f"kernel.h_over_dx={h}", f"plugins.use={BOUNDARIES[boundary]}"]
+    if span is None:
+        over += [f"domain.max=[{w},{1.5 * d}]", f"blocks[0].max=[{w},{d}]"]
+    else:
+        over += ["case.dim=3", "domain.min=[0,0,0]", f"domain.max=[{w},{1.5 * d},{span}]", "blocks[0].min=[0,0,0]",
+                 f"blocks[0].max=[{w},{d},{span}]"]
+    over += list(sets)
     case, pm = runner.load(case_dir, [parse_set(s) for s in over])
     return Simulation(case, pm)
 
@@ -78,12 +88,14 @@ def main():
     ap.add_argument("--size", type=float, nargs=2, default=[0.4, 0.4], metavar=("WIDTH", "DEPTH"))
     ap.add_argument("--boundary", nargs="+", default=list(BOUNDARIES), choices=list(BOUNDARIES))
     ap.add_argument("--set", action="append", default=[], help="more case overrides, as sph run --set")
+    ap.add_argument("--span", type=float, help="a 3D tank this deep across (m); keep it and the width above 4h + 2 dx")
     ap.add_argument("--jitter", type=float, default=0.0, help="with --run: random start offsets, up to this many dx")
     ap.add_argument("--run", type=float, default=0.0, help="also run each tank this many seconds (s)")
     ap.add_argument("--modes", action=argparse.BooleanOptionalAction, default=True,
                     help="linearise (default); --no-modes: the run only")
     a = ap.parse_args()
-    print(f"plain-Tait tank at rest, {a.size[0]} m x {a.size[1]} m; omega in rad/s")
+    across = f" x {a.span} m across (3D)" if a.span else ""
+    print(f"plain-Tait tank at rest, {a.size[0]} m x {a.size[1]} m{across}; omega in rad/s")
     if a.modes:
         print(f"{'h/dx':>5} {'boundary':>11} {'growth 1/s':>11} {'where':>9} {'acoustic':>9} {'fit':>5} {'theory':>8} "
               f"{'wall offset':>11} {'sloshing':>9} {'theory':>7} {'damping':>8}")
@@ -91,14 +103,14 @@ def main():
         for name in a.boundary:
             if not a.modes:
                 print(f"{h:>5} {name:>11}", flush=True)
-                jittered_run(tank(h, name, a.size, a.set), a.jitter, a.run)
+                jittered_run(tank(h, name, a.size, a.set, a.span), a.jitter, a.run)
                 continue
-            r = column_at_rest(tank(h, name, a.size, a.set))
+            r = column_at_rest(tank(h, name, a.size, a.set, a.span))
             print(f"{h:>5} {name:>11} {r['growth']:>+11.3g} {str(r['where']):>9} {r['acoustic']:>9.2f} {r['acoustic_fit']:>5.3f} "
                   f"{r['acoustic_theory']:>8.2f} {r['wall_offset_dx']:>+9.2f}dx {r['slosh']:>9.3f} "
                   f"{r['slosh_theory']:>7.3f} {r['slosh_damping']:>8.3f}", flush=True)
             if a.run > 0:
-                jittered_run(tank(h, name, a.size, a.set), a.jitter, a.run)
+                jittered_run(tank(h, name, a.size, a.set, a.span), a.jitter, a.run)
 
 
 if __name__ == "__main__":

@@ -110,27 +110,31 @@ def mode_like(values, vectors, shape: np.ndarray, part: slice) -> tuple[complex,
 
 
 def column_at_rest(sim) -> dict:
-    """The known answers of the module docstring for a 2D rectangular block of water at rest
-    that fills a tank's width (``sim`` at its start): the largest growth rate (1/s) and where
-    that mode moves most (column, row of the initial lattice from the lower left), the quarter
-    wave's omega against pi c0 / (2 H) with the cosine of its fit and the depth excess
+    """The known answers of the module docstring for a rectangular block of water at rest
+    that fills a tank's width along x (``sim`` at its start; 2D or 3D, depth along the case's
+    up axis): the largest growth rate (1/s) and where that mode moves most (column along x,
+    row along the up axis, of the initial lattice from the lower corner), the quarter wave's
+    omega against pi c0 / (2 H) with the cosine of its fit and the depth excess
     pi c0 / (2 omega) - H in dx (how far below the floor the scheme's wall acts), the first
-    sloshing mode's omega and damping against sqrt(g k tanh(k H)) with its fit."""
+    sloshing mode along x, its omega and damping against sqrt(g k tanh(k H)) with its fit."""
     st, prm, dx = sim.state, sim.params, sim.case.dx
     n, dim = st.n, prm.dim
-    if dim != 2:
-        raise ValueError(f"column_at_rest takes a 2D case (x along the tank, z up); this one has dim = {dim}")
+    up = int(np.argmax(np.abs(prm.up[:dim])))
+    if up == 0:
+        raise ValueError("column_at_rest needs x horizontal (the sloshing runs along x); this case's up axis is x")
     values, vectors = modes(rate_jacobian(sim))
     b = blocks(n, dim)
     x0 = st.pos[:, 0] - (st.pos[:, 0].min() - dx / 2)
-    z0 = st.pos[:, 1] - (st.pos[:, 1].min() - dx / 2)
+    z0 = st.pos[:, up] - (st.pos[:, up].min() - dx / 2)
     width, depth = float(x0.max() + dx / 2), float(z0.max() + dx / 2)
     amp = np.linalg.norm(np.abs(vectors[b["x"], 0]).reshape(n, dim), axis=1)
     worst = int(np.argmax(amp))
     acoustic, fit_a = mode_like(values, vectors, np.cos(np.pi * z0 / (2 * depth)), b["rho"])
     k = np.pi / width  # the first sloshing mode: velocity potential cos(k x) cosh(k z)
-    wave = np.column_stack([-np.sin(k * x0) * np.cosh(k * z0), np.cos(k * x0) * np.sinh(k * z0)]).ravel()
-    slosh, fit_s = mode_like(values, vectors, wave, b["v"])
+    wave = np.zeros((n, dim))
+    wave[:, 0] = -np.sin(k * x0) * np.cosh(k * z0)
+    wave[:, up] = np.cos(k * x0) * np.sinh(k * z0)
+    slosh, fit_s = mode_like(values, vectors, wave.ravel(), b["v"])
     return {"growth": float(values[0].real), "where": (int(x0[worst] / dx), int(z0[worst] / dx)),
             "acoustic": acoustic.imag, "acoustic_theory": math.pi * prm.c0 / (2 * depth), "acoustic_fit": fit_a,
             "wall_offset_dx": (math.pi * prm.c0 / (2 * acoustic.imag) - depth) / dx,
