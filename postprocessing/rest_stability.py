@@ -94,6 +94,8 @@ def main():
     ap.add_argument("--modes", action=argparse.BooleanOptionalAction, default=True,
                     help="linearise (default); --no-modes: the run only")
     a = ap.parse_args()
+    if not a.modes and a.run <= 0:
+        ap.error("--no-modes leaves only the run: give --run T (s)")
     across = f" x {a.span} m across (3D)" if a.span else ""
     print(f"plain-Tait tank at rest, {a.size[0]} m x {a.size[1]} m{across}; omega in rad/s")
     if a.modes:
