@@ -85,12 +85,12 @@ def test_the_column_rings_at_its_quarter_wave(at_h2, boundary):
 
 @pytest.mark.parametrize("boundary", list(BOUNDARIES))
 def test_the_first_sloshing_mode_has_the_frequency_of_linear_water_waves(at_h2, boundary):
-    """Within 6 % of sqrt(g k tanh(k H)) at 20 particles across (measured -1.8 % with ghosts,
-    -5.3 % with the wall model, whose walls act as if the tank were wider and deeper), and
+    """Within 3 % of sqrt(g k tanh(k H)) at 20 particles across with ghosts (measured -1.8 %),
+    6 % with the wall model (-5.3 %: its walls act as if the tank were wider and deeper), and
     damped, not amplified, by the artificial viscosity."""
     r = at_h2[boundary]
     assert r["slosh_fit"] > 0.3
-    assert abs(r["slosh"] / r["slosh_theory"] - 1.0) < 0.06
+    assert abs(r["slosh"] / r["slosh_theory"] - 1.0) < (0.03 if boundary == "ghosts" else 0.06)
     assert r["slosh_damping"] > 0.0
 
 
