@@ -41,6 +41,15 @@ CORE: dict[str, dict[str, O]] = {
         "modified_pressure": O(False, "bool", doc="Batchelor's modified pressure: the EOS gives P = p - p_hydrostatic, "
                                "gravity acts as buoyancy g (1 - rho0/rho); for fluid at rest in a container"),
     },
+    "relax": {
+        "time": O(0.0, "float", "s", "settle the start before t = 0: this long of the case's own dynamics with damped "
+                  "velocities (dynamic relaxation, sphcore/relax.py), for water at rest in its container; 0 is off",
+                  min=0.0),
+        "damping_time": O(0.3, "float", "s", "velocities decay as exp(-t / damping_time) while relaxing; "
+                          "about the period of the slowest motion to settle over 2 pi", positive=True),
+        "jitter": O(1e-3, "float", doc="random start velocities moving the particles by about this many dx "
+                    "(seeded), to leave a symmetric but unstable arrangement such as the square lattice", min=0.0),
+    },
     "corrections": {
         "kernel_gradient": O(False, "bool", doc="Bonet & Lok (1999) corrected kernel gradient, symmetrised "
                              "(L_i + L_j)/2, restores first-order consistency near walls and the free surface"),

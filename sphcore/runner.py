@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numba
 
-from . import budget, checkpoint, outdir, pluginhost, resume, threads
+from . import budget, checkpoint, outdir, pluginhost, relax, resume, threads
 from .case import apply_overrides, case_file, parse_override, read_toml, validate
 from .errors import CaseError, Instability, OutputError
 from .overrides import key_text
@@ -54,6 +54,7 @@ def load(case_dir, overrides=(), t_end=None):
         case = validate(raw, file, pluginhost.option_schemas(file, raw))
         budget.check_scales(case)
         budget.check_memory(case)  # particles and memory, before anything is allocated
+        relax.check(case)
         pm = pluginhost.make_manager(case.config["plugins"]["use"], file)
         pluginhost.configure(pm, case)  # plugins check their own tables
     except CaseError as e:
@@ -99,6 +100,9 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     # fresh machine (said before it starts; checked after it, the cache would always hold them)
     if mode != "off" and not kernels_cached(case.config["case"]["dim"]):
         print("[sph] compiling kernels, once (about 10 s; later runs load them from the cache)",
+              file=sys.stderr, flush=True)
+    if mode != "off" and not restart and case.config["relax"]["time"] > 0:
+        print(f"[sph] relaxing the start: {case.config['relax']['time']:g} s of damped motion before t = 0",
               file=sys.stderr, flush=True)
     # particles and plugins are set up, and the first step sized, before anything touches
     # the disk: a case that fails there leaves the output directory as it was

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import checkpoint, checks, eos
+from . import checkpoint, checks, eos, relax
 from .context import RunContext
 from .errors import CaseError, Instability
 from .forces import Forces, PressureField
@@ -110,8 +110,9 @@ class Simulation:
     the runner then calls :meth:`output`.
     """
 
-    def __init__(self, case, pm, output_dir: Path | None = None, restarting: bool = False):
+    def __init__(self, case, pm, output_dir: Path | None = None, restarting: bool = False, relaxing: bool = False):
         self.case, self.pm = case, pm
+        self.relaxing = relaxing  # a copy of the run settling its start (sphcore.relax): no sph_after_step
         state = build_state(case)
         cfg = case.config
         sph = cfg["physics"]["sph"]
@@ -126,6 +127,9 @@ class Simulation:
         if tops is not None and cfg["physics"]["hydrostatic_init"] and not prm.modified_pressure:
             _hydrostatic_start(case, prm, state, tops)
         saved = checkpoint.read(output_dir) if restarting else None
+        relaxed = None
+        if not (saved or relaxing) and cfg["relax"]["time"] > 0:
+            relaxed = relax.settle(case, pm, state)  # positions and densities at rest in the scheme's equilibrium
         if saved:  # constants above come from the case's initial particles, as in the first run
             checkpoint.restore_state(ctx, *saved)
         self.pressure = PressureField(prm)
@@ -135,6 +139,8 @@ class Simulation:
         self.integrator = SCHEMES[cfg["integrator"]["scheme"]](
             ctx.state, self.forces, self._after_drift, self.update_pressure, evolves_density=sph)
         ctx._rates = self.integrator
+        if relaxed is not None:
+            ctx.stats(CORE)["relax"] = relaxed
         pm.hook.sph_setup(ctx=ctx)  # every ctx attribute is usable here
         self.integrator.resize()  # a plugin may have added particles
         if saved:
@@ -244,7 +250,8 @@ class Simulation:
         ctx.step += 1
         if ctx.step % cfg["checks"]["every"] == 0:
             self.check()
-        self.hooks.sph_after_step(ctx=ctx)
+        if not self.relaxing:  # gauges and probes sample the run, not its relaxation
+            self.hooks.sph_after_step(ctx=ctx)
 
     # -- checks -----------------------------------------------------------------------
 
