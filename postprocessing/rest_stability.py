@@ -28,11 +28,11 @@ the unmoved lattice printed every 0.5 s: an unstable rest state shows its growth
 disturbance the exact lattice does not have (a run from the exact lattice may stay put by
 symmetry alone).
 
-With ``--relax T [TAU]`` each tank is first relaxed: moved by the ``--jitter`` amplitude
-(default 1e-3 dx here) and run for T seconds with every velocity damped as exp(-t / TAU)
-(TAU = 0.3 s by default: dynamic relaxation, Day 1965; as a start for SPH, Colagrossi et al.
-2012, Comput. Phys. Commun. 183, 1641), then stopped; the linearisation and the run start
-from that state, and the run's displacements are measured from it. The line ``relaxed``
+With ``--relax T [TAU]`` each tank starts from the core's relaxed start (``[relax]``,
+:mod:`sphcore.relax`: T seconds of the case's dynamics with every velocity damped as
+exp(-t / TAU), TAU = 0.3 s by default, from random velocities of about the ``--jitter``
+amplitude, default 1e-3 dx here); the linearisation and the run start from that state, and
+the run's displacements are measured from it. The line ``relaxed``
 gives the largest move from the lattice (dx), the largest speed before the stop and the
 worst layer's pressure error below the top two (``pressure_gauge``'s definition). What it
 shows (docs/wall_pressure.md, "A relaxed start"): an unstable lattice can settle into a
@@ -105,23 +105,11 @@ def jittered_run(sim, amp: float, t_end: float, every: float = 0.5):
           f"worst layer below the top two {worst_layer(sim):.2f} %", flush=True)
 
 
-def relaxed(sim, t_relax: float, tau: float, amp: float):
-    """Dynamic relaxation: ``sim`` moved by up to ``amp`` dx, run for ``t_relax`` s with its
-    velocities damped as exp(-t / tau), then stopped (velocities zero); prints what it did."""
-    st, dx = sim.state, sim.case.dx
-    lattice = dict(zip(st.id.tolist(), st.pos.copy()))
-    st.pos += amp * dx * np.random.default_rng(1).uniform(-1.0, 1.0, st.pos.shape)
-    sim.integrator.invalidate()
-    while sim.t < t_relax - 1e-12:
-        sim.advance()
-        st.vel *= np.exp(-sim.dt / tau)
-        sim.integrator.invalidate()  # the accelerations' viscous part follows the velocities
-    vmax = float(np.linalg.norm(st.vel, axis=1).max())
-    st.vel[:] = 0.0
-    sim.integrator.invalidate()
-    ref = np.array([lattice[i] for i in st.id.tolist()])
-    print(f"      relaxed {t_relax:g} s (tau {tau:g} s): moved {np.linalg.norm(st.pos - ref, axis=1).max() / dx:.3g} dx "
-          f"from the lattice, speed {vmax:.2g} m/s before the stop, worst layer below the top two "
+def relaxed(sim):
+    """Print what the core's relaxation of ``sim``'s start did (``[relax]``, sphcore.relax)."""
+    r = sim.ctx.stats("core")["relax"]
+    print(f"      relaxed {r['time_s']:g} s (tau {r['damping_time_s']:g} s): moved {r['max_move_dx']:.3g} dx from the "
+          f"lattice, speed {r['last_speed_m_s']:.2g} m/s before the stop, worst layer below the top two "
           f"{worst_layer(sim):.2f} %", flush=True)
     return sim
 
@@ -144,14 +132,13 @@ def main():
         ap.error("--no-modes leaves only the run: give --run T (s)")
     if a.relax and (len(a.relax) > 2 or min(a.relax) <= 0):
         ap.error("--relax takes T and optionally TAU, both positive (s)")
-    if a.relax:
-        a.set = ["time.t_end=1e9"] + a.set  # the case's own end would stop the relaxation
+    if a.relax:  # the core's relaxation ([relax]); the case's own end would stop the run that follows
+        a.set = ["time.t_end=1e9", f"relax.time={a.relax[0]}", f"relax.damping_time={a.relax[1] if len(a.relax) > 1 else 0.3}",
+                 f"relax.jitter={a.jitter or 1e-3}"] + a.set
 
     def build(h, name):
         sim = tank(h, name, a.size, a.set, a.span)
-        if a.relax:
-            return relaxed(sim, a.relax[0], a.relax[1] if len(a.relax) > 1 else 0.3, a.jitter or 1e-3)
-        return sim
+        return relaxed(sim) if a.relax else sim
 
     across = f" x {a.span} m across (3D)" if a.span else ""
     print(f"plain-Tait tank at rest, {a.size[0]} m x {a.size[1]} m{across}; omega in rad/s")

@@ -23,8 +23,12 @@ What it did (how far the particles moved from the lattice, the last speed it rem
 in the summary (``relax`` in the core's figures).
 
 For water at rest in its container (a tank, the still start of a sloshing or wave case).
-A column held by a gate that the case removes at t = 0 would collapse while it relaxes: such
-a case is refused (``blocks[k].velocity`` set is refused as well: the relaxation ends at rest).
+A column held by a gate that the case removes at t = 0 would collapse while it relaxes: a
+relaxation in which a particle moves more than ``MOVE_LIMIT`` dx from where it started is
+stopped and the case refused, as is a block given a velocity (the relaxation ends at rest).
+The relaxation runs with plugins of its own (a second plugin manager, configured from the
+same case), so that no plugin's state of the run is touched by it; it uses at most
+``parallel.threads`` threads, as the run does.
 """
 
 from __future__ import annotations
@@ -33,9 +37,15 @@ import math
 
 import numpy as np
 
+import time
+
+import numba
+
 from .errors import CaseError, Instability
 
 JITTER_SEED = 20121  # the start's random velocities: the same relaxation on every machine
+MOVE_LIMIT = 3.0  # dx: water at rest settles within a spacing or two; a collapsing column does not
+MOVE_EVERY = 200  # steps between the checks of how far the particles moved
 
 
 def check(case) -> None:
@@ -53,46 +63,65 @@ def check(case) -> None:
                             "ends at rest and would discard the block's velocity")
 
 
-def settle(case, pm, state) -> dict:
+def settle(case, state) -> dict:
     """Relax ``state`` (the case's particles as built, hydrostatic start applied) in place
     (module docstring); returns the figures for the summary."""
+    from . import pluginhost
     from .simulation import Simulation  # the relaxation runs a Simulation of its own
 
     cfg = case.config["relax"]
-    sim = Simulation(case, pm, relaxing=True)
-    st, dx = sim.state, case.dx
-    sim.ctx.t_end = cfg["time"]
-    start = st.pos[np.argsort(st.id)].copy()
-    rng = np.random.default_rng(JITTER_SEED)
-    st.vel[:] += cfg["jitter"] * dx / cfg["damping_time"] * rng.uniform(-1.0, 1.0, st.vel.shape)
-    sim.integrator.invalidate()
-    first = True
+    clock = time.perf_counter()
+    pm = pluginhost.make_manager(case.config["plugins"]["use"], case.file)
+    pluginhost.configure(pm, case)
+    threads_before = numba.get_num_threads()
+    if case.config["parallel"]["threads"]:
+        numba.set_num_threads(min(threads_before, case.config["parallel"]["threads"]))
     try:
+        sim = Simulation(case, pm, relaxing=True)
+        st, dx = sim.state, case.dx
+        sim.ctx.t_end = cfg["time"]
+        ids0 = np.sort(st.id)
+        start = st.pos[np.argsort(st.id)].copy()
+        rng = np.random.default_rng(JITTER_SEED)
+        st.vel[:] += cfg["jitter"] * dx / cfg["damping_time"] * rng.uniform(-1.0, 1.0, st.vel.shape)
+        sim.integrator.invalidate()
         while not sim.done():
             sim.advance()
-            if first:
-                first = False
+            if sim.step == 1:
                 steps = cfg["time"] / sim.dt
                 if steps > case.config["time"]["max_steps"]:
                     raise CaseError(case.file, "relax.time", f"{cfg['time']:g} s of relaxation at a step of "
                                     f"{sim.dt:.3g} s needs {steps:.3g} steps, more than time.max_steps = "
                                     f"{case.config['time']['max_steps']}: expected a shorter relaxation")
+            if sim.step % MOVE_EVERY == 0:
+                moved = _largest_move(st, start) / dx
+                if moved > MOVE_LIMIT:
+                    raise CaseError(case.file, "relax.time", f"0 (off) for this case: a particle moved {moved:.3g} dx "
+                                    f"within {sim.t:.3g} s of relaxation (more than {MOVE_LIMIT:g} dx): the "
+                                    "water is not at rest in its container (a column held by a gate falls)")
             # the accelerations of the next step keep the undamped velocities' viscous part:
             # a fictitious dynamics whose only purpose is its end state
             st.vel *= math.exp(-sim.dt / cfg["damping_time"])
     except Instability as e:
         raise CaseError(case.file, "relax.time", f"the relaxation became unstable ({e}): expected water "
                         "at rest in its container; try a longer relax.damping_time or none") from None
+    finally:
+        numba.set_num_threads(threads_before)
     order = np.argsort(st.id)
     speed = float(np.sqrt(np.max(np.einsum("ij,ij->i", st.vel, st.vel), initial=0.0)))
     pos, rho = st.pos[order], st.rho[order]
     mine = np.argsort(state.id)
-    if not np.array_equal(state.id[mine], st.id[order]):  # the same case builds the same particles
-        raise RuntimeError("the relaxation's particles are not the run's")
+    if not (np.array_equal(state.id[mine], ids0) and np.array_equal(ids0, st.id[order])):
+        raise RuntimeError("the relaxation's particles are not the run's (a plugin added particles?)")
     state.pos[mine] = pos
     state.rho[mine] = rho
     state.vel[mine] = 0.0
-    moved = np.linalg.norm(pos - start, axis=1)
     return {"time_s": sim.t, "steps": sim.step, "damping_time_s": cfg["damping_time"], "jitter_dx": cfg["jitter"],
-            "max_move_dx": float(moved.max() / dx) if moved.size else 0.0,
-            "last_speed_m_s": speed}
+            "max_move_dx": _largest_move(st, start) / dx, "last_speed_m_s": speed,
+            "wall_time_s": time.perf_counter() - clock}
+
+
+def _largest_move(st, start) -> float:
+    """Largest distance (m) of the particles from ``start`` (rows in id order)."""
+    pos = st.pos[np.argsort(st.id)]
+    return float(np.sqrt(np.max(np.einsum("ij,ij->i", pos - start, pos - start), initial=0.0)))

@@ -106,7 +106,14 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
               file=sys.stderr, flush=True)
     # particles and plugins are set up, and the first step sized, before anything touches
     # the disk: a case that fails there leaves the output directory as it was
-    sim = budget.simulation(case, pm, out, restarting=restart)
+    try:
+        sim = budget.simulation(case, pm, out, restarting=restart)
+    except CaseError as e:  # the relaxation's errors name its key, which may have come from --set
+        raise _blame_option(e, overrides, t_end) from None
+    relaxed = sim.ctx.stats("core").get("relax")
+    if relaxed and mode != "off" and not restart:
+        print(f"[sph] relaxed in {relaxed['wall_time_s']:.1f} s: particles moved up to {relaxed['max_move_dx']:.3g} dx, "
+              f"last speed {relaxed['last_speed_m_s']:.2g} m/s", file=sys.stderr, flush=True)
     budget.check_first_step(sim)
     manifest = prepare_output(out, overwrite, restart, case.file)
     past = resume.history(saved)

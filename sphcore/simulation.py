@@ -129,7 +129,7 @@ class Simulation:
         saved = checkpoint.read(output_dir) if restarting else None
         relaxed = None
         if not (saved or relaxing) and cfg["relax"]["time"] > 0:
-            relaxed = relax.settle(case, pm, state)  # positions and densities at rest in the scheme's equilibrium
+            relaxed = relax.settle(case, state)  # positions and densities at rest in the scheme's equilibrium
         if saved:  # constants above come from the case's initial particles, as in the first run
             checkpoint.restore_state(ctx, *saved)
         self.pressure = PressureField(prm)
