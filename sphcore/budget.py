@@ -83,13 +83,14 @@ def check_scales(case) -> None:
                         "a reference density nearer 1 (or a smaller eos.gamma)")
 
 
-def simulation(case, pm, output_dir=None, restarting=False):
+def simulation(case, pm, output_dir=None, restarting=False, settle=True):
     """``Simulation(...)``, with arithmetic that fails while setting up from the case's
-    values (an overflow, a division by zero) reported as a CaseError, not a traceback."""
+    values (an overflow, a division by zero) reported as a CaseError, not a traceback;
+    ``settle=False`` leaves out the relaxed start (``[relax]``), which only a run does."""
     from .simulation import Simulation
 
     try:
-        return Simulation(case, pm, output_dir, restarting=restarting)
+        return Simulation(case, pm, output_dir, restarting=restarting, settle=settle)
     except ArithmeticError as e:
         raise CaseError(case.file, "-", f"setting up the particles failed on {type(e).__name__} ({e}): expected "
                         "values of a physical size") from None

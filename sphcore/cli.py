@@ -94,13 +94,16 @@ def main(argv=None) -> int:
 
             case, pm = runner.load(args.case_dir, args.overrides, args.t_end)
             out = runner.output_path(case, args.output)
-            sim = budget.simulation(case, pm)  # particles, sound speed and plugin set-up, no step
+            sim = budget.simulation(case, pm, settle=False)  # particles, sound speed, plugin set-up; no step
             dt = budget.check_first_step(sim)
             walls = (f"{case.faces.count} wall faces ({sim.state.removed_by_walls} particles of the blocks "
                      "not created: inside a solid or closer than a radius to a face), " if case.faces.count else "")
             print(f"{case.file}: ok: {case.dim}D, {sim.state.n} particles, {case.planes.count} wall planes, {walls}"
                   f"h = {sim.params.h:.4g} m, c0 = {sim.params.c0:.4g} m/s, first dt ~ {dt:.3g} s, "
                   f"plugins: {', '.join(case.config['plugins']['use']) or 'none'}; output: {out.resolve()}")
+            if case.config["relax"]["time"] > 0:
+                print(f"relax: {case.config['relax']['time']:g} s of damped motion before t = 0, done by sph run "
+                      "(not by check; its first step is sized here from the unrelaxed start)")
             if out.exists() and (not out.is_dir() or any(out.iterdir())):  # what run would say about it
                 print(f"{out.resolve()}: exists and is not empty: sph run needs --overwrite (sph's files only), "
                       "--restart or --output DIR")

@@ -110,7 +110,8 @@ class Simulation:
     the runner then calls :meth:`output`.
     """
 
-    def __init__(self, case, pm, output_dir: Path | None = None, restarting: bool = False, relaxing: bool = False):
+    def __init__(self, case, pm, output_dir: Path | None = None, restarting: bool = False, relaxing: bool = False,
+                 settle: bool = True):
         self.case, self.pm = case, pm
         self.relaxing = relaxing  # a copy of the run settling its start (sphcore.relax): no sph_after_step
         state = build_state(case)
@@ -128,7 +129,7 @@ class Simulation:
             _hydrostatic_start(case, prm, state, tops)
         saved = checkpoint.read(output_dir) if restarting else None
         relaxed = None
-        if not (saved or relaxing) and cfg["relax"]["time"] > 0:
+        if settle and not (saved or relaxing) and cfg["relax"]["time"] > 0:  # settle=False: sph check
             relaxed = relax.settle(case, state)  # positions and densities at rest in the scheme's equilibrium
         if saved:  # constants above come from the case's initial particles, as in the first run
             checkpoint.restore_state(ctx, *saved)

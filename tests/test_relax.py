@@ -173,3 +173,17 @@ def test_an_unstable_relaxation_is_refused_with_its_reason(tmp_path, capsys, mon
     err = capsys.readouterr().err
     assert "relax.time" in err and "made up by the test" in err and "case.toml" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_sph_check_does_not_relax_and_says_so(tmp_path, capsys, monkeypatch):
+    """sph check validates a case in seconds: it does not run the relaxation (which may take
+    minutes), and says that sph run will."""
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("sph check relaxed")
+
+    monkeypatch.setattr(relax, "settle", must_not_run)
+    case_dir = write_case(tmp_path / "tank", TANK + "[relax]\ntime = 100.0\n")
+    assert cli.main(["check", str(case_dir)]) == 0
+    out = capsys.readouterr().out
+    assert "ok:" in out and "relax: 100 s of damped motion before t = 0, done by sph run" in out
