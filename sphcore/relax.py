@@ -34,12 +34,10 @@ same case), so that no plugin's state of the run is touched by it; it uses at mo
 from __future__ import annotations
 
 import math
-
-import numpy as np
-
 import time
 
 import numba
+import numpy as np
 
 from .errors import CaseError, Instability
 
