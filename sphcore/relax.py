@@ -28,7 +28,10 @@ relaxation in which a particle moves more than ``MOVE_LIMIT`` dx from where it s
 stopped and the case refused, as is a block given a velocity (the relaxation ends at rest).
 The relaxation runs with plugins of its own (a second plugin manager, configured from the
 same case), so that no plugin's state of the run is touched by it; it uses at most
-``parallel.threads`` threads, as the run does.
+``parallel.threads`` threads, as the run does. While it runs, the relaxation's particles and
+work arrays exist beside the run's (built from the same case): the case's memory estimate
+(``particles.memory_limit_gib``) counts one set, so a relaxed case near that limit may need
+up to twice it.
 """
 
 from __future__ import annotations
