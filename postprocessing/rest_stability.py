@@ -54,7 +54,7 @@ from pathlib import Path
 import numpy as np
 
 from sphcore import runner
-from sphcore_plugins.gauges.hydrostatic import layer_errors
+from sphcore_plugins.gauges.hydrostatic import layer_errors, worst_layer_error
 from sphcore.linearised import column_at_rest
 from sphcore.overrides import parse_set
 from sphcore.simulation import Simulation
@@ -85,7 +85,7 @@ def worst_layer(sim) -> float:
     z = st.pos @ prm.up
     top = float(sim.case.config["blocks"][0]["max"][int(np.argmax(np.abs(prm.up)))])
     rows = layer_errors(z, st.p, sim.case.dx, top, prm.rho0, prm.g_abs)
-    return 100.0 * float(np.nanmax(np.abs(rows[rows[:, 0] < top - 2 * sim.case.dx, 3])))
+    return 100.0 * worst_layer_error(rows, top, sim.case.dx, 2)
 
 
 def jittered_run(sim, amp: float, t_end: float, every: float = 0.5):

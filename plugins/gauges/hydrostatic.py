@@ -31,6 +31,13 @@ def layer_errors(y, p, dx, H, rho0, g):
     return np.array(rows)
 
 
+def worst_layer_error(rows, H, dx, skip):
+    """The largest |relative error| of the layers of ``rows`` (:func:`layer_errors`) whose mean
+    height lies below the top ``skip`` layers of a column H high; NaN when none does."""
+    below = rows[:, 0] < H - skip * dx
+    return float(np.nanmax(np.abs(rows[below, 3]))) if below.any() else float("nan")
+
+
 class PressureGauge:
     @hookimpl
     def sph_options(self):
@@ -69,7 +76,6 @@ class PressureGauge:
         z = pos @ ctx.params.up - self.floor
         dx = ctx.params.dx  # layers one initial spacing thick (not the contact radius, which a case may set)
         rows = layer_errors(z, p, dx, self.H, ctx.params.rho0, ctx.params.g_abs)
-        below = rows[:, 0] < self.H - self.skip * dx
         moved = np.linalg.norm(pos - self.pos0, axis=1)
         deep = (self.pos0 @ ctx.params.up - self.floor) < self.H - self.skip * dx  # started below the top layers
         return {
@@ -77,5 +83,5 @@ class PressureGauge:
             "max_displacement_m": float(moved.max()),
             "max_displacement_below_top_m": float(moved[deep].max()) if deep.any() else float("nan"),
             "surface_drift_m": float(z.max() + dx / 2 - self.H),
-            "pressure_max_layer_err": float(np.nanmax(np.abs(rows[below, 3]))) if below.any() else float("nan"),
+            "pressure_max_layer_err": worst_layer_error(rows, self.H, dx, self.skip),
         }
