@@ -375,3 +375,24 @@ def test_peer_series_scores_the_experiment_itself_as_exact(tmp_path, capsys):
         assert abs(float(out["rise_dtau"])) < 1e-9
     assert peer.main([str(js), "--key", "nope", "--reference", "buchner_2002_P1", "--H", "0.6"]) == 2
     assert peer.main([str(tmp_path / "none.csv"), "--reference", "buchner_2002_P1", "--H", "0.6"]) == 2
+
+
+def test_peer_series_reads_a_named_column_of_a_dimensionless_file(tmp_path, capsys):
+    """A digitised figure (t sqrt(g/H), p/(rho g H), several curves side by side): --column
+    picks one, --scaled reads the dimensionless form; the experiment scores 0, the
+    experiment raised by 0.1 rho g H scores an MAE and offset of 0.1; a column the header
+    does not name exits 2."""
+    from sphcore_plugins.gauges import reference
+
+    exp = reference.series("buchner_2002_P1")
+    f = tmp_path / "figure.csv"
+    f.write_text("time,exp,raised\n" + "\n".join(f"{a!r},{b!r},{b + 0.1!r}" for a, b in exp.tolist()))
+    peer = _script("peer_series")
+    common = ["--reference", "buchner_2002_P1", "--H", "0.6", "--scaled"]
+    for column, expected in (("exp", 0.0), ("raised", 0.1)):
+        assert peer.main([str(f), "--column", column] + common) == 0
+        out = dict(line.split(" = ") for line in capsys.readouterr().out.splitlines())
+        assert abs(float(out["mae_rhogH"]) - expected) < 1e-9
+        assert abs(float(out["offset_rhogH"]) - expected) < 1e-9
+    assert peer.main([str(f), "--column", "nope"] + common) == 2
+    assert "--column nope" in capsys.readouterr().err
