@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from sphcore import runner
+from sphcore.errors import CaseError
 from sphcore.overrides import parse_set
 from sphcore.simulation import Simulation
 from sphcore_plugins.gauges.hydrostatic import layer_errors
@@ -108,8 +109,12 @@ def main(argv=None) -> int:
     if args.relax <= 0 or args.time <= 0:
         print("--relax and --time must be positive", file=sys.stderr)
         return 2
-    table, columns, moved, errors, t = cross_start(args.case, args.relax_with, args.run_with, args.h, args.relax,
-                                                   args.time)
+    try:
+        table, columns, moved, errors, t = cross_start(args.case, args.relax_with, args.run_with, args.h,
+                                                       args.relax, args.time)
+    except (CaseError, ValueError) as e:  # a case or a plugin name that cannot run
+        print(e, file=sys.stderr)
+        return 2
     print(f"{args.run_with} from the equilibrium of {args.relax_with} (h = {args.h:g} dx, relaxed {args.relax:g} s): "
           f"accelerations (x, y) in g, layers from the top, columns from the left wall {columns}")
     for k, row in enumerate(table):

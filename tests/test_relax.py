@@ -211,3 +211,5 @@ def test_the_wall_model_pulls_the_top_corners_of_the_ghosts_equilibrium(tmp_path
     assert corner > 10 * np.abs(own[:2, 0, 0]).max()
     assert np.abs(cross[:, -1, :]).max() < 1e-3  # the middle column feels no difference
     assert np.isfinite(errors).all() and moved < 0.1 and moved_own < 0.1
+    assert mod.main(["--case", str(tmp_path / "none")]) == 2  # no case.toml: a message, not a traceback
+    assert mod.main(["--case", str(case_dir), "--run-with", "nope", "--relax", "0.01", "--time", "0.01"]) == 2
