@@ -2,11 +2,14 @@
 
     python postprocessing/tank_cross_start.py [--case cases/hydrostatic_tank] [--relax-with ghost]
                                               [--run-with wall_integral] [--h 2.0] [--relax 10] [--time 5]
+                                              [--run-set KEY=VALUE ...]
 
 Relaxes the case (plain Tait pressure, ``kernel.h_over_dx = H``) with ``reflective`` and the
 boundary plugin ``--relax-with`` (:mod:`sphcore.relax`, ``--relax`` seconds), then starts a
 second run of the same case with ``reflective`` and ``--run-with`` from those positions and
-densities, at rest, and runs it for ``--time`` seconds. Prints
+densities, at rest, and runs it for ``--time`` seconds, with the overrides ``--run-set`` (each
+like ``sph run --set``; for the second run only, e.g. a density diffusion the relaxation did
+not have). Prints
 
 - the accelerations (in g) the second boundary gives the first one's equilibrium, per
   layer of one dx from the top and per column from the left wall (the first six columns
@@ -36,12 +39,12 @@ from sphcore_plugins.gauges.hydrostatic import layer_errors
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def load(case_dir, boundary: str, h: float, relax: float, t_end: float | None = None):
+def load(case_dir, boundary: str, h: float, relax: float, t_end: float | None = None, extra=()):
     sets = ["physics.modified_pressure=false", f"kernel.h_over_dx={h!r}",
             f'plugins.use=["reflective","{boundary}"]', f"relax.time={relax!r}"]
     if t_end is not None:
         sets.append(f"time.t_end={t_end!r}")
-    return runner.load(case_dir, [parse_set(s) for s in sets])
+    return runner.load(case_dir, [parse_set(s) for s in sets] + [parse_set(s, "--run-set") for s in extra])
 
 
 def by_id(st):
@@ -62,13 +65,13 @@ def layer_table(pos, field, dx, top, columns):
     return rows
 
 
-def cross_start(case_dir, relax_with, run_with, h, relax, time):
+def cross_start(case_dir, relax_with, run_with, h, relax, time, run_sets=()):
     """Relax with ``relax_with``, run with ``run_with`` from there (module docstring).
     Returns the second boundary's start accelerations (layers from the top x ``columns``
     x 2, in g), the columns, the largest displacement at the end (dx) and the layers'
     pressure errors at the end (fractions, top layer first)."""
     first = Simulation(*load(case_dir, relax_with, h, relax))
-    case, pm = load(case_dir, run_with, h, 0.0, time)
+    case, pm = load(case_dir, run_with, h, 0.0, time, run_sets)
     sim = Simulation(case, pm)
     a, b = by_id(sim.state), by_id(first.state)
     if not np.array_equal(sim.state.id[a], first.state.id[b]):
@@ -105,13 +108,15 @@ def main(argv=None) -> int:
     ap.add_argument("--h", type=float, default=2.0, help="kernel.h_over_dx")
     ap.add_argument("--relax", type=float, default=10.0, help="relaxation time (s) with --relax-with")
     ap.add_argument("--time", type=float, default=5.0, help="run time (s) with --run-with")
+    ap.add_argument("--run-set", action="append", default=[], metavar="KEY=VALUE",
+                    help="an override of the second run only (as sph run --set); repeatable")
     args = ap.parse_args(argv)
     if args.relax <= 0 or args.time <= 0:
         print("--relax and --time must be positive", file=sys.stderr)
         return 2
     try:
         table, columns, moved, errors, t = cross_start(args.case, args.relax_with, args.run_with, args.h,
-                                                       args.relax, args.time)
+                                                       args.relax, args.time, args.run_set)
     except (CaseError, ValueError) as e:  # a case or a plugin name that cannot run
         print(e, file=sys.stderr)
         return 2

@@ -213,3 +213,4 @@ def test_the_wall_model_pulls_the_top_corners_of_the_ghosts_equilibrium(tmp_path
     assert np.isfinite(errors).all() and moved < 0.1 and moved_own < 0.1
     assert mod.main(["--case", str(tmp_path / "none")]) == 2  # no case.toml: a message, not a traceback
     assert mod.main(["--case", str(case_dir), "--run-with", "nope", "--relax", "0.01", "--time", "0.01"]) == 2
+    assert mod.main(["--case", str(case_dir), "--run-set", "nokey", "--relax", "0.01", "--time", "0.01"]) == 2
