@@ -256,6 +256,34 @@ def test_wedge_apex_is_one_contact_not_ping_pong(angle, cr):
     assert g == 1 and counts[0] == 0 and np.array_equal(v, vel) and np.array_equal(pos, pos0)
 
 
+def test_an_elastic_corner_contact_keeps_the_speed():
+    """A joint contact with two walls of a 30-degree corner, velocity 40 degrees below the
+    floor: its reflection across the floor, 40 degrees up, enters the upper wall, so
+    w + CR (w - v) (w: v projected onto the cone of admissible velocities) leaves the cone.
+    With CR = 1 the walls' own sequence follows, floor then upper wall: the velocity leaves
+    at 20 degrees with its speed (the projection w, used before, kept cos 40 = 0.77 of it
+    and lost 41 % of the kinetic energy). CR = 0.5 leaves it slower and admissible, CR = 0
+    at the projection onto the floor."""
+    from sphcore_plugins.reflective.corner import respond, scratch
+
+    a, b = np.radians(30.0), np.radians(-40.0)
+    nrm = np.array([[0.0, 1.0], [np.sin(a), -np.cos(a)]])  # floor y >= 0, wall below y = x tan 30
+    c = np.zeros(2)
+    for cr in (1.0, 0.5, 0.0):
+        ws, wi = scratch()
+        pos = np.array([[0.5, 0.01]])
+        vel = np.array([[np.cos(b), np.sin(b)]])
+        assert respond(nrm, c, 2, pos, vel, 0, cr, 1e-12, ws[0], wi[0])
+        assert np.all(nrm @ vel[0] >= -1e-12)  # no velocity into either wall
+        if cr == 1.0:
+            np.testing.assert_allclose(vel[0], [np.cos(np.radians(20.0)), np.sin(np.radians(20.0))],
+                                       rtol=0, atol=1e-15)
+        elif cr == 0.5:
+            assert 0.5 < np.linalg.norm(vel[0]) < 1.0
+        else:
+            np.testing.assert_allclose(vel[0], [np.cos(b), 0.0], rtol=0, atol=1e-15)
+
+
 # --------------------------------------------------------------------------------------
 # One plane: exactly the analytic answer (Eqs. 1, 2, 8)
 # --------------------------------------------------------------------------------------

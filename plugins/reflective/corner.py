@@ -10,7 +10,9 @@ contact), the end point B goes to its projection P onto their intersection (the 
 admissible point: the polyhedral generalisation of Eq. 1's r - d), then to
 P + CR (P - B) when that is admissible too, else P; the velocity likewise goes to the
 projection w of v onto the cone n_k . v >= 0 and then w + CR (w - v) (Eq. 2's
--CR u for one wall), else w. For a single wall both reduce to Eq. 1 and to Eq. 2 in its
+-CR u for one wall); when that leaves the cone (an acute corner) and CR > 0, Eq. 2 is
+applied across the wall the velocity enters most until it enters none (at most
+MAX_BOUNCES times, velocity only: an isometry for CR = 1), else w. For a single wall both reduce to Eq. 1 and to Eq. 2 in its
 end-point form; the contact form (the work of the step's acceleration between contact
 and end point, ``velocity = "contact"``) is not applied to a joint contact. A corner
 passed with one reflection per wall (a box corner: x, y, z once each) never comes here:
@@ -190,6 +192,37 @@ def respond(nrm, c, m, pos, vel, i, cr, tol, ws, wi):
         for k in range(m):
             if _dot(nrm[k], q) < -vtol:
                 ok = False
+        if not ok and cr > 0.0:
+            # w + CR (w - v) leaves the cone (an acute corner): the walls' own sequence,
+            # Eq. 2 across the wall the velocity enters most, until none is entered; an
+            # isometry for CR = 1, where w alone would stop the normal motion (energy lost)
+            for j in range(dim):
+                q[j] = v[j]
+            ok = _bounce_into_cone(nrm, m, q, cr, vtol)
         for j in range(dim):
             vel[i, j] = q[j] if ok else w[j]
     return True
+
+
+#: velocity reflections of one joint contact, at most: a wedge of angle a needs about pi / a
+#: (36 at 5 degrees)
+MAX_BOUNCES = 64
+
+
+@njit(cache=True)
+def _bounce_into_cone(nrm, m, q, cr, vtol):
+    """q <- q - (1 + CR) (n_k . q) n_k for the wall k that q enters most (n_k . q < -vtol),
+    repeated until it enters none (True) or MAX_BOUNCES times (False)."""
+    for _ in range(MAX_BOUNCES):
+        worst = -vtol
+        kk = -1
+        for k in range(m):
+            d = _dot(nrm[k], q)
+            if d < worst:
+                worst = d
+                kk = k
+        if kk < 0:
+            return True
+        for j in range(q.shape[0]):
+            q[j] -= (1.0 + cr) * worst * nrm[kk, j]
+    return False
