@@ -136,7 +136,9 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
     """The paper's loop for particle i (earliest contact first, until inside or the guard);
     returns 1 if the guard put it back at pos0, else 0. Planes and faces compete for the
     earliest contact; when a wall is met a second time in the step and the contact touches
-    two or more walls, that contact is resolved as one (:mod:`.corner`)."""
+    two or more walls, that contact is resolved as one (:mod:`.corner`) if CR < 1. With
+    CR = 1 the paper's sequence is the exact (billiard) answer and ends in any corner (a
+    wedge of angle a lets a path through after about pi / a reflections): it is kept."""
     dim = pos.shape[1]
     nplanes = normals.shape[0]
     guarded = 0
@@ -189,7 +191,9 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
             n2 = normals[best, 2] if dim == 3 else 0.0
         # a wall met again in this step means ping-pong between walls (a wedge): then the
         # contact is resolved with every wall touching there at once (wi[11:19]: the last
-        # eight walls met, planes by index, faces after them)
+        # eight walls met, planes by index, faces after them); not with CR = 1, whose
+        # sequence ends (the joint response's point reflection through a corner is the
+        # billiard's end point only where the walls are perpendicular)
         wall = best if face < 0 else nplanes + face
         revisit = False
         for h in range(min(count, 8)):
@@ -197,7 +201,7 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
                 revisit = True
         wi[11 + count % 8] = wall
         count += 1
-        if revisit and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart,
+        if revisit and cr < 1.0 and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart,
                                gitems, a0, a1, a2, r, cr, ws, wi):
             continue
         depth = r - dbest  # > 0, how far the end point lies beyond contact (m)

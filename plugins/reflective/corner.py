@@ -16,7 +16,8 @@ MAX_BOUNCES times, velocity only: an isometry for CR = 1), else w. For a single 
 end-point form; the contact form (the work of the step's acceleration between contact
 and end point, ``velocity = "contact"``) is not applied to a joint contact. A corner
 passed with one reflection per wall (a box corner: x, y, z once each) never comes here:
-the paper's sequence is kept, bit for bit.
+the paper's sequence is kept, bit for bit; nor does CR = 1, whose sequence is the exact
+billiard and ends in any corner (:func:`sphcore_plugins.reflective.collision._reflect_one`).
 
 The projections are small quadratic programmes (at most MAX_ACTIVE constraints, dim <= 3),
 solved exactly by enumerating the active sets of at most dim constraints: the nearest
