@@ -201,8 +201,8 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
                 revisit = True
         wi[11 + count % 8] = wall
         count += 1
-        if revisit and cr < 1.0 and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart,
-                               gitems, a0, a1, a2, r, cr, ws, wi):
+        if revisit and cr < 1.0 and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape,
+                                            gstart, gitems, a0, a1, a2, r, cr, ws, wi):
             continue
         depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
         u = vel[i, 0] * n0 + vel[i, 1] * n1

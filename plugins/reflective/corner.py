@@ -3,21 +3,22 @@
 The paper treats one wall per contact (section 2.2, Fig. 7). In a wedge the particle then
 bounces between the two walls, ever closer to the apex: with CR = 0 each reflection
 projects it onto one wall and the projections converge like cos(angle)^(2k) (about 800
-reflections per step in a 7-degree wedge). When the sequence meets a wall a second time
-in one step at a contact point that touches two or more walls, the particle is caught in
-the corner and that contact is resolved as one: with the walls' tangent half-spaces n_k . X >= c_k (k touching at the
-contact), the end point B goes to its projection P onto their intersection (the nearest
-admissible point: the polyhedral generalisation of Eq. 1's r - d), then to
-P + CR (P - B) when that is admissible too, else P; the velocity likewise goes to the
-projection w of v onto the cone n_k . v >= 0 and then w + CR (w - v) (Eq. 2's
+reflections per step in a 7-degree wedge). When the sequence meets a wall a second time in
+one step at a contact point that touches two or more walls, the particle is caught in the
+corner and that contact is resolved as one: with the walls' tangent half-spaces
+n_k . X >= c_k (k touching at the contact), the end point B goes to its projection P onto
+their intersection (the nearest admissible point: the polyhedral generalisation of Eq. 1's
+r - d), then to P + CR (P - B) when that is admissible too, else P; the velocity likewise
+goes to the projection w of v onto the cone n_k . v >= 0 and then w + CR (w - v) (Eq. 2's
 -CR u for one wall); when that leaves the cone (an acute corner) and CR > 0, Eq. 2 is
-applied across the wall the velocity enters most until it enters none (at most
-MAX_BOUNCES times, velocity only: an isometry for CR = 1), else w. For a single wall both reduce to Eq. 1 and to Eq. 2 in its
-end-point form; the contact form (the work of the step's acceleration between contact
-and end point, ``velocity = "contact"``) is not applied to a joint contact. A corner
-passed with one reflection per wall (a box corner: x, y, z once each) never comes here:
-the paper's sequence is kept, bit for bit; nor does CR = 1, whose sequence is the exact
-billiard and ends in any corner (:func:`sphcore_plugins.reflective.collision._reflect_one`).
+applied across the wall the velocity enters most until it enters none (at most MAX_BOUNCES
+times, velocity only: an isometry for CR = 1), else w. For a single wall both reduce to
+Eq. 1 and to Eq. 2 in its end-point form; the contact form (the work of the step's
+acceleration between contact and end point, ``velocity = "contact"``) is not applied to a
+joint contact. A corner passed with one reflection per wall (a box corner: x, y, z once
+each) never comes here: the paper's sequence is kept, bit for bit; nor does CR = 1, whose
+sequence is the exact billiard and ends in any corner
+(:func:`sphcore_plugins.reflective.collision._reflect_one`).
 
 The projections are small quadratic programmes (at most MAX_ACTIVE constraints, dim <= 3),
 solved exactly by enumerating the active sets of at most dim constraints: the nearest
