@@ -6,6 +6,7 @@ repository. Plugins are never selected unless a test says so (``[plugins] use = 
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -79,3 +80,12 @@ def by_id(state) -> dict[str, np.ndarray]:
 def good_case(tmp_path) -> Path:
     """A valid case directory (see GOOD_CASE)."""
     return write_case(tmp_path / "good", GOOD_CASE)
+
+
+def script(name: str):
+    """postprocessing/<name>.py as a module (the scripts are not a package)."""
+    path = Path(__file__).resolve().parents[1] / "postprocessing" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"pp_{name}", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod

@@ -3,7 +3,6 @@ the post-processing script; and the front gauge's choice of reference and wall h
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import shutil
@@ -12,7 +11,7 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 import pytest
-from conftest import make_sim, write_case, write_cut_netcdf
+from conftest import make_sim, script, write_case, write_cut_netcdf
 
 from sphcore import cli, runner
 from sphcore.errors import CaseError
@@ -225,16 +224,8 @@ def test_probes_without_output_directory_still_summarise(tmp_path):
 # ---------------------------------------------------------------------------- post-processing
 
 
-def _script(name):
-    """postprocessing/<name>.py as a module (the scripts are not a package)."""
-    spec = importlib.util.spec_from_file_location(f"pp_{name}", ROOT / "postprocessing" / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def _postprocessing():
-    return _script("probes")
+    return script("probes")
 
 
 def test_postprocessing_plots_each_probe_and_prints_the_figures(tiny_run, capsys):
@@ -367,7 +358,7 @@ def test_peer_series_scores_the_experiment_itself_as_exact(tmp_path, capsys):
     csv.write_text("time_s,p_pa\n" + "\n".join(f"{float(a)!r},{float(b)!r}" for a, b in zip(t, p)))
     js = tmp_path / "peer.json"
     js.write_text(json.dumps({"P1": {"time": t.tolist(), "values": p.tolist()}}))
-    peer = _script("peer_series")
+    peer = script("peer_series")
     for args in ([str(csv)], [str(js), "--key", "P1"]):
         assert peer.main(args + ["--reference", "buchner_2002_P1", "--H", "0.6"]) == 0
         out = dict(line.split(" = ") for line in capsys.readouterr().out.splitlines())
@@ -387,7 +378,7 @@ def test_peer_series_reads_a_named_column_of_a_dimensionless_file(tmp_path, caps
     exp = reference.series("buchner_2002_P1")
     f = tmp_path / "figure.csv"
     f.write_text("time,exp,raised\n" + "\n".join(f"{a!r},{b!r},{b + 0.1!r}" for a, b in exp.tolist()))
-    peer = _script("peer_series")
+    peer = script("peer_series")
     common = ["--reference", "buchner_2002_P1", "--H", "0.6", "--scaled"]
     for column, expected in (("exp", 0.0), ("raised", 0.1)):
         assert peer.main([str(f), "--column", column] + common) == 0

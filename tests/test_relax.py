@@ -18,6 +18,7 @@ import pytest
 from sphcore import cli, relax, runner
 from sphcore.simulation import Simulation
 from sphcore.testing import write_case
+from conftest import script
 
 # cases/hydrostatic_tank cut to 20 x 20 particles, plain Tait pressure, h = 1.5 dx
 TANK = """
@@ -195,13 +196,7 @@ def test_the_wall_model_pulls_the_top_corners_of_the_ghosts_equilibrium(tmp_path
     top corner particles towards the side wall (measured: -0.04 to -0.09 g on the 50 x 50
     tank) and leaves the middle column alone: the two boundaries disagree where the free
     surface meets a wall (docs/wall_pressure.md, "What drives the layer alternation")."""
-    import importlib.util
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parent.parent
-    spec = importlib.util.spec_from_file_location("pp_cross", root / "postprocessing" / "tank_cross_start.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = script("tank_cross_start")
     case_dir = write_case(tmp_path / "tank", TANK)
     own, columns, moved_own, _, _ = mod.cross_start(case_dir, "ghost", "ghost", 2.0, 3.0, 0.01)
     cross, _, moved, errors, t = mod.cross_start(case_dir, "ghost", "wall_integral", 2.0, 3.0, 0.01)

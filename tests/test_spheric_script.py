@@ -3,22 +3,15 @@ impulse is the integral it claims (the script is what docs/walls.md quotes)."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from conftest import script
 from sphcore_plugins.gauges.reference import kleefsman
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("pp_spheric_test2", ROOT / "postprocessing" / "spheric_test2.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return script("spheric_test2")
 
 
 def _as_run(exp, t1=2.0):
