@@ -1,12 +1,16 @@
 """Pressure against depth in a tank at rest, compared with the hydrostatic rho g (H - y).
 
-    python postprocessing/pressure_profile.py RUN_OUTPUT [--H 1.0] [--rho0 1000] [--time T]
+    python postprocessing/pressure_profile.py RUN_OUTPUT [--H 1.0] [--rho0 1000] [--time T] [--column XA XB ...]
 
 Takes the last frame (or the one nearest --time), averages the pressure over each
 horizontal particle layer (layers one spacing dx = 2 r apart, counted from the floor), and
 writes RUN/pressure_profile.csv (y, p_mean, p_min, p_max, p_hydrostatic, relative error)
 and RUN/pressure_profile.png. Prints the largest layer error below the top two layers, the
-criterion of the validation.
+criterion of the validation. ``--column XA XB`` (repeatable) also prints, for the particles
+with XA <= x < XB, layer by layer from the top: the mean pressure's departure from
+rho0 g (H - y) in units of rho0 g dx, and the mean height's departure from the layer's
+lattice height (k + 1/2) dx in units of dx (a pattern of the layers that the layer means
+over the whole width would average away).
 """
 
 from __future__ import annotations
@@ -38,12 +42,29 @@ def layer_profile(pos, p, radius, H, rho0, floor=0.0, up=1):
     return np.c_[rows[:, 0], rows[:, 1], spread, rows[:, 2], rows[:, 3]], dx
 
 
+def column_profile(pos, p, dx, H, rho0, xa, xb, up=1, across=0):
+    """Rows (layer from the top, 1-based; pressure departure / (rho0 g dx); height departure
+    / dx) of the particles with xa <= x < xb, per layer of one dx counted from the top."""
+    sel = (pos[:, across] >= xa) & (pos[:, across] < xb)
+    y, q = pos[sel, up], p[sel]
+    layer = np.floor((H - y) / dx).astype(int)
+    rows = []
+    for k in np.unique(layer):
+        m = layer == k
+        rows.append((k + 1, float(((q[m] - rho0 * G * (H - y[m])) / (rho0 * G * dx)).mean()),
+                     float((y[m].mean() - (H - (k + 0.5) * dx)) / dx)))
+    return np.array(rows)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run")
     ap.add_argument("--H", type=float, help="still-water depth (m); default: the run's fluid block")
     ap.add_argument("--rho0", type=float, help="reference density (kg/m^3); default: the run's")
     ap.add_argument("--time", type=float, help="frame time (s); default: the last frame")
+    ap.add_argument("--column", type=float, nargs=2, action="append", metavar=("XA", "XB"),
+                    help="also print the layers of the particles with XA <= x < XB (m): pressure and height "
+                         "departures (repeatable)")
     args = ap.parse_args(argv)
     found = open_run(args.run, "pressure_profile.py", "tank_at_rest")
     if found.config:
@@ -83,7 +104,15 @@ def main(argv=None):
     fig.savefig(outdir / "pressure_profile.png", dpi=120)
     plt.close(fig)
     print(f"t = {t:.6g} s: largest layer-mean error below the top two layers: {100 * worst:.3f}%")
-    return {"t": t, "max_layer_rel_err": worst}
+    columns = {}
+    for xa, xb in args.column or ():
+        rows = column_profile(pos, f["pressure"], dx, args.H, args.rho0, xa, xb)
+        columns[(xa, xb)] = rows
+        print(f"x in [{xa:g}, {xb:g}) m, layer from the top: (p - rho0 g (H - y)) / (rho0 g dx), "
+              f"(y - lattice height) / dx")
+        for k, dp, dy in rows:
+            print(f"  {int(k):4d}  {dp:+.4f}  {dy:+.3e}")
+    return {"t": t, "max_layer_rel_err": worst, "columns": columns}
 
 
 if __name__ == "__main__":

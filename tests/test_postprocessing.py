@@ -67,6 +67,18 @@ def test_each_script_reads_its_kind_and_writes_beside_the_run(runs, name, kind):
         assert front[0, 1] == pytest.approx(0.06, abs=1e-9)  # the column's width: 3 dx, the tip's edge
 
 
+def test_pressure_profile_columns_of_a_tank_at_rest(runs):
+    """--column prints every layer of the chosen particles: with modified pressure the tank
+    stays on its lattice with the exact hydrostatic pressure, so both departures vanish."""
+    res = script("pressure_profile.py", runs / "tank" / "output", "--column", 0.0, 0.02, "--column", 0.08, 0.12)
+    assert res.returncode == 0, res.stderr
+    for head in ("x in [0, 0.02) m", "x in [0.08, 0.12) m"):
+        block = res.stdout.split(head)[1].splitlines()[1:11]
+        rows = np.array([[float(v) for v in line.split()] for line in block])
+        np.testing.assert_array_equal(rows[:, 0], np.arange(1, 11))  # 10 layers of 0.02 m, from the top
+        np.testing.assert_allclose(rows[:, 1:], 0.0, atol=1e-9)
+
+
 @pytest.mark.parametrize("name,kind", [("wavefront.py", "tank"), ("pressure_profile.py", "column")])
 def test_a_run_of_another_kind_is_refused(runs, name, kind):
     res = script(name, runs / kind / "output")
