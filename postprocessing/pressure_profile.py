@@ -66,6 +66,9 @@ def main(argv=None):
                     help="also print the layers of the particles with XA <= x < XB (m): pressure and height "
                          "departures (repeatable)")
     args = ap.parse_args(argv)
+    for xa, xb in args.column or ():
+        if not xa < xb:
+            ap.error(f"--column {xa:g} {xb:g}: expected XA < XB (m)")
     found = open_run(args.run, "pressure_profile.py", "tank_at_rest")
     if found.config:
         block = found.first_block()

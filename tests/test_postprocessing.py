@@ -77,6 +77,8 @@ def test_pressure_profile_columns_of_a_tank_at_rest(runs):
         rows = np.array([[float(v) for v in line.split()] for line in block])
         np.testing.assert_array_equal(rows[:, 0], np.arange(1, 11))  # 10 layers of 0.02 m, from the top
         np.testing.assert_allclose(rows[:, 1:], 0.0, atol=1e-9)
+    bad = script("pressure_profile.py", runs / "tank" / "output", "--column", 0.1, 0.1)
+    assert bad.returncode == 2 and "--column 0.1 0.1: expected XA < XB" in bad.stderr, bad.stderr
 
 
 @pytest.mark.parametrize("name,kind", [("wavefront.py", "tank"), ("pressure_profile.py", "column")])
