@@ -44,16 +44,13 @@ def layer_profile(pos, p, radius, H, rho0, floor=0.0, up=1):
 
 def column_profile(pos, p, dx, H, rho0, xa, xb, up=1, across=0):
     """Rows (layer from the top, 1-based; pressure departure / (rho0 g dx); height departure
-    / dx) of the particles with xa <= x < xb, per layer of one dx counted from the top."""
+    / dx) of the particles with xa <= x < xb, from the top layer down; the layers and their
+    means are the ``pressure_gauge`` plugin's, as in :func:`layer_profile`."""
     sel = (pos[:, across] >= xa) & (pos[:, across] < xb)
-    y, q = pos[sel, up], p[sel]
-    layer = np.floor((H - y) / dx).astype(int)
-    rows = []
-    for k in np.unique(layer):
-        m = layer == k
-        rows.append((k + 1, float(((q[m] - rho0 * G * (H - y[m])) / (rho0 * G * dx)).mean()),
-                     float((y[m].mean() - (H - (k + 0.5) * dx)) / dx)))
-    return np.array(rows)
+    rows = layer_errors(pos[sel, up], p[sel], dx, H, rho0, G)  # (mean y, mean p, rho0 g (H - mean y), err)
+    k = np.floor(rows[:, 0] / dx)  # the layer's index from the floor
+    out = np.c_[np.rint(H / dx) - k, (rows[:, 1] - rows[:, 2]) / (rho0 * G * dx), (rows[:, 0] - (k + 0.5) * dx) / dx]
+    return out[::-1]
 
 
 def main(argv=None):
