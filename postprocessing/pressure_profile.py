@@ -104,15 +104,13 @@ def main(argv=None):
     fig.savefig(outdir / "pressure_profile.png", dpi=120)
     plt.close(fig)
     print(f"t = {t:.6g} s: largest layer-mean error below the top two layers: {100 * worst:.3f}%")
-    columns = {}
     for xa, xb in args.column or ():
         rows = column_profile(pos, f["pressure"], dx, args.H, args.rho0, xa, xb)
-        columns[(xa, xb)] = rows
         print(f"x in [{xa:g}, {xb:g}) m, layer from the top: (p - rho0 g (H - y)) / (rho0 g dx), "
               f"(y - lattice height) / dx")
         for k, dp, dy in rows:
             print(f"  {int(k):4d}  {dp:+.4f}  {dy:+.3e}")
-    return {"t": t, "max_layer_rel_err": worst, "columns": columns}
+    return {"t": t, "max_layer_rel_err": worst}
 
 
 if __name__ == "__main__":

@@ -73,8 +73,8 @@ def test_pressure_profile_columns_of_a_tank_at_rest(runs):
     res = script("pressure_profile.py", runs / "tank" / "output", "--column", 0.0, 0.02, "--column", 0.08, 0.12)
     assert res.returncode == 0, res.stderr
     for head in ("x in [0, 0.02) m", "x in [0.08, 0.12) m"):
-        block = res.stdout.split(head)[1].splitlines()[1:11]
-        rows = np.array([[float(v) for v in line.split()] for line in block])
+        block = res.stdout.split(head)[1].split("x in [")[0].splitlines()[1:]  # this column's rows only
+        rows = np.array([[float(v) for v in line.split()] for line in block if line.strip()])
         np.testing.assert_array_equal(rows[:, 0], np.arange(1, 11))  # 10 layers of 0.02 m, from the top
         np.testing.assert_allclose(rows[:, 1:], 0.0, atol=1e-9)
     bad = script("pressure_profile.py", runs / "tank" / "output", "--column", 0.1, 0.1)
