@@ -7,7 +7,9 @@ and the experiment shipped with sphcore (``reference.kleefsman()``). Prints, ove
 the run covers (or ``--span``):
 
 - water depth H1-H4: RMS of (run - experiment) in m, the experiment interpolated at the
-  run's sample times;
+  run's sample times; for H1-H3 (dry at the start) the front's arrival, the first time the
+  depth exceeds 0.02 m (one particle at the default resolution) and 0.05 m, for run and
+  experiment alike: a constant delay from probe to probe is a clock, a growing one a speed;
 - pressure P1-P4: first-impact time, the first time p exceeds 2 kPa (about 18 % of P1's
   peak; the same threshold for run and experiment), and the peak over the first impact
   (from that time to 0.2 s after it) in Pa, with the run's relative error;
@@ -29,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 IMPACT_PA = 2000.0  # first-impact threshold (Pa)
+FRONT_M = (0.02, 0.05)  # the front's arrival at a dry depth probe: depth above these (m)
 WINDOW_S = 0.2  # the first impact's peak is searched this long after its arrival (s)
 
 
@@ -75,6 +78,8 @@ def compare(run: dict, exp: dict, span) -> dict:
         if h in run:
             ref = np.interp(t[sel], exp["t"], exp[h])
             out[f"{h}_rms_m"] = float(np.sqrt(np.mean((run[h][sel] - ref) ** 2)))
+            if h != "H4":
+                out[f"{h}_front"] = [(d, arrival(t, run[h], d), arrival(exp["t"], exp[h], d)) for d in FRONT_M]
     for p in ("P1", "P2", "P3", "P4"):
         if p in run:
             ta_run, ta_exp = arrival(t, run[p]), arrival(exp["t"], exp[p])
@@ -125,7 +130,9 @@ def main(argv=None) -> int:
     print(f"SPHERIC test 2, {args.run_dir}: t in [{t0:.3g}, {t1:.3g}] s")
     for h in ("H1", "H2", "H3", "H4"):
         if f"{h}_rms_m" in res:
-            print(f"  {h}: depth RMS error {res[f'{h}_rms_m']:.4f} m")
+            fronts = "".join(f"; depth > {d:g} m at {a:.4f} s (experiment {b:.4f} s, {a - b:+.4f} s)"
+                             for d, a, b in res.get(f"{h}_front", ()))
+            print(f"  {h}: depth RMS error {res[f'{h}_rms_m']:.4f} m{fronts}")
     for p in ("P1", "P2", "P3", "P4"):
         if p in res:
             r = res[p]

@@ -31,9 +31,26 @@ def test_the_experiment_scored_against_itself_is_perfect():
         r = res[p]
         assert r["arrival_error_s"] == 0.0 and r["peak_error"] == 0.0
         assert r["impulse_ratio"] == pytest.approx(1.0, rel=1e-12)
+    for h in ("H1", "H2", "H3"):
+        for _, run_s, exp_s in res[f"{h}_front"]:
+            assert run_s == exp_s and np.isfinite(run_s)
     # P1 reaches 2 kPa at 0.394 s (the experiment file), its impulse over 0.2 s is about 1.4 kPa s
     assert 0.39 < res["P1"]["arrival_exp_s"] < 0.40
     assert 1000.0 < res["P1"]["impulse_exp_Pa_s"] < 2000.0
+
+
+def test_a_record_run_late_shows_its_delay_at_every_probe():
+    """The experiment played 25 ms late: every front arrival and every first impact reads
+    +25 ms (within one 1 ms sample), so a clock offset shows as a constant delay."""
+    mod, exp = _script(), kleefsman()
+    late = {k: v for k, v in _as_run(exp).items()}
+    late["time"] = late["time"] + 0.025
+    res = mod.compare(late, exp, None)
+    for h in ("H1", "H2", "H3"):
+        for _, run_s, exp_s in res[f"{h}_front"]:
+            assert run_s - exp_s == pytest.approx(0.025, abs=0.0011)
+    for p in ("P1", "P2", "P3", "P4"):
+        assert res[p]["arrival_error_s"] == pytest.approx(0.025, abs=0.0011)
 
 
 def test_impulse_of_a_step_and_of_a_spike():
