@@ -30,8 +30,12 @@ at t = 0 the surface at x drops as
 
 (the next term comes from the nonlinear and moving-boundary corrections, both O(t^2) in
 the pressure). A weakly compressible fluid reaches (1) after a few acoustic transits L / c0.
-An instantaneous release is the fastest one: a door pulled up in a finite time drains the
-reservoir later, never earlier, than (2).
+An instantaneous release is the fastest one: where a door still stands it pushes on the
+water (p >= 0, so q >= -(H - z) there), and the difference of the two q is harmonic, zero
+on top, without normal derivative on floor and back wall and >= 0 on the face, hence
+>= 0 everywhere (maximum principle) and its z-derivative at the surface <= 0: under a
+door pulled up in a finite time the surface starts to fall more slowly, never faster,
+than (1) says.
 
 The clock. A record's depth h(t) at a probe in the reservoir is fitted, over
 0 <= t <= ``--fit-until``, by h0 - a_z t'^2 / 2 with t' = t - tau for t > tau (h0 before),
