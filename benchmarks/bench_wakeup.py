@@ -1,6 +1,6 @@
 """What a parallel loop costs after serial work: the second thread's wake-up.
 
-    NUMBA_NUM_THREADS=2 python benchmarks/bench_wakeup.py [--n 18224] [--gaps 0 50 200] [--calls 500]
+    NUMBA_NUM_THREADS=2 python benchmarks/bench_wakeup.py [--n 18224] [--gaps 0 50 200] [--calls 500] [--load 0]
 
 A step of sphcore is several parallel loops (numba's prange: fork and join, no barrier
 inside) with serial work between them. numba's OpenMP workers spin for
@@ -9,14 +9,17 @@ a loop that starts after a longer serial stretch first wakes them. This script t
 element-wise loop of ``--n`` elements (a square root and a multiply-add each; 18,224 =
 8 x the 2,278 particles of PySPH's dam break) called back to back, and called after
 ``--gaps`` microseconds (about) of serial work, with one thread and with all of them;
-it prints the median time of the loop alone (the serial work's own time subtracted).
-The OpenMP settings are sphcore's (``import sphcore`` first). Figures are printed, never
-asserted.
+it prints the median time of the loop alone (the serial work's own time subtracted) and
+the gap as measured. ``--load N`` starts N busy processes beside it (each an endless loop:
+another user's job on a core), as ``bench_loaded.py`` does. The OpenMP settings are
+sphcore's (``import sphcore`` first; ``GOMP_SPINCOUNT`` in the environment wins). Figures
+are printed, never asserted.
 """
 
 from __future__ import annotations
 
 import argparse
+import multiprocessing as mp
 import statistics
 import time
 
@@ -41,6 +44,11 @@ def serial(x, reps):
     return s
 
 
+def busy():
+    while True:
+        pass
+
+
 def per_call(fn, calls, repeats=5):
     out = []
     for _ in range(repeats):
@@ -56,15 +64,29 @@ def main():
     ap.add_argument("--n", type=int, default=18224)
     ap.add_argument("--gaps", type=float, nargs="+", default=[0.0, 50.0, 200.0], help="serial work between calls (us)")
     ap.add_argument("--calls", type=int, default=500)
+    ap.add_argument("--load", type=int, default=0, help="busy processes beside the measurement")
     args = ap.parse_args()
+    loads = [mp.Process(target=busy, daemon=True) for _ in range(args.load)]
+    for p in loads:
+        p.start()
+    try:
+        measure(args)
+    finally:
+        for p in loads:
+            p.terminate()
+
+
+def measure(args):
     most = numba.get_num_threads()
     x = np.random.default_rng(0).random(args.n)
     y = np.zeros_like(x)
     small = np.random.default_rng(1).random(256)
     loop(x, y)
     serial(small, 1)
-    one = per_call(lambda: serial(small, 1), 20 * args.calls)  # one pass: reps per us of gap
-    print(f"threading layer {numba.threading_layer()}, {most} threads at most, loop of {args.n} elements")
+    # one pass over `small`, from a long call (a call of one pass is mostly numba's call overhead)
+    one = per_call(lambda: serial(small, 1000), args.calls // 10 + 1) / 1000
+    print(f"threading layer {numba.threading_layer()}, {most} threads at most, loop of {args.n} elements, "
+          f"{args.load} busy processes beside")
     print(f"{'gap us':>8} {'1 thread us':>12} {f'{most} threads us':>14}")
     for gap in args.gaps:
         reps = max(int(round(gap * 1e-6 / one)), 0)

@@ -1,7 +1,7 @@
 """The first instants of a dam break: the incompressible initial acceleration of a released
 column, and the clock of a record (experiment or run) measured against it.
 
-    python postprocessing/dam_release.py [RUN_DIR] [--probe H4] [--fit-until 0.1]
+    python postprocessing/dam_release.py [RUN_DIR] [--probe H4] [--windows 0-0.1 0.04-0.12 ...]
 
 The theory (the leading-order problem of Korobkin & Yilmaz, "The initial stage of
 dam-break flow", J. Eng. Math. 63 (2009) 293-308; derived here for a reservoir of finite
@@ -30,19 +30,22 @@ at t = 0 the surface at x drops as
 
 (the next term comes from the nonlinear and moving-boundary corrections, both O(t^2) in
 the pressure). A weakly compressible fluid reaches (1) after a few acoustic transits L / c0.
-An instantaneous release is the fastest one: where a door still stands it pushes on the
-water (p >= 0, so q >= -(H - z) there), and the difference of the two q is harmonic, zero
-on top, without normal derivative on floor and back wall and >= 0 on the face, hence
->= 0 everywhere (maximum principle) and its z-derivative at the surface <= 0: under a
-door pulled up in a finite time the surface starts to fall more slowly, never faster,
-than (1) says.
+At leading order (while the water is nearly at rest) an instantaneous release is the
+fastest one: where a door still stands it pushes on the water (p >= 0, so q >= -(H - z)
+there), and the difference of the two q is harmonic, zero on top, without normal
+derivative on floor and back wall and >= 0 on the face, hence >= 0 everywhere (maximum
+principle) and its z-derivative at the surface <= 0: under a door pulled up in a finite
+time the surface starts to fall more slowly, never faster, than (1) says.
 
-The clock. A record's depth h(t) at a probe in the reservoir is fitted, over
-0 <= t <= ``--fit-until``, by h0 - a_z t'^2 / 2 with t' = t - tau for t > tau (h0 before),
-a_z from (1) at the probe: tau is when that record's water started to move, on its own
-clock (least squares over h0 and tau, tau on a 0.5 ms grid). Printed for the experiment
-shipped with sphcore (SPHERIC test 2, Kleefsman et al. 2005, probe H4, 0.646 m from the
-face) and for RUN_DIR/probes.csv when given.
+The clock. A record's depth h(t) at a probe in the reservoir is fitted, over a window
+t0 <= t <= t1, by h0 + a_z t'^2 / 2 with t' = max(t - tau, 0), a_z from (1) at the probe:
+tau is when the record's water started to move, on its own clock, if (2) held (least
+squares over h0 and tau, tau on a 0.5 ms grid from -60 to +60 ms). (2) overestimates the
+fall as t grows (the next order), so tau drifts with the window even for a record that
+starts exactly at t = 0; a run and the experiment fitted on the same window share that
+drift, and their difference is the experiment's lead on the run. Printed for the
+experiment shipped with sphcore (SPHERIC test 2, Kleefsman et al. 2005, probe H4, 0.646 m
+from the face) and for RUN_DIR/probes.csv when given, for each of ``--windows``.
 
 A missing directory or file, or a probe the record lacks: one line on stderr, exit 2.
 """
@@ -64,8 +67,10 @@ PROBES = {"H4": 2.638}
 
 def surface_acceleration(x, depth=DEPTH, length=LENGTH, g=G, terms=20000):
     """Eq. (1): vertical acceleration (m/s^2, negative: down) of the free surface at
-    distance ``x`` (m, scalar or array) from the released face, at t = 0+."""
+    distance ``x`` (m, scalar or array, 0 <= x <= length) from the released face, at t = 0+."""
     x = np.atleast_1d(np.asarray(x, dtype=float))
+    if not np.all((x >= 0) & (x <= length)):
+        raise ValueError(f"x must lie in the reservoir, 0 <= x <= {length} m")
     n = np.arange(terms)
     k = (2 * n + 1) * np.pi / (2 * depth)
     # cosh(k (L - x)) / cosh(k L) without overflow
@@ -89,14 +94,19 @@ def surface_drop(x, t, **kw):
     return -0.5 * surface_acceleration(x, **kw) * np.asarray(t, dtype=float) ** 2
 
 
-def fit_start(t, h, a_z, until, taus=None):
-    """Least-squares fit of h(t), 0 <= t <= until, by h0 + a_z max(t - tau, 0)^2 / 2.
-    Returns (tau, h0, rms): tau in s, h0 and the rms residual in m."""
+TAUS = np.arange(-0.06, 0.06 + 1e-12, 0.0005)  # the start times tried (s)
+
+
+def fit_start(t, h, a_z, t0, t1, taus=TAUS):
+    """Least-squares fit of h(t), t0 <= t <= t1, by h0 + a_z max(t - tau, 0)^2 / 2.
+    Returns (tau, h0, rms): tau in s, h0 and the rms residual in m. A window holding
+    fewer than 3 finite samples, or a best tau on the edge of ``taus`` (the record is not
+    this shape there), raises ValueError."""
     t, h = np.asarray(t, float), np.asarray(h, float)
-    sel = (t >= 0) & (t <= until)
+    sel = (t >= t0) & (t <= t1) & np.isfinite(h)
     t, h = t[sel], h[sel]
-    if taus is None:
-        taus = np.arange(-0.06, 0.06 + 1e-12, 0.0005)
+    if t.size < 3:
+        raise ValueError(f"fewer than 3 samples in [{t0:g}, {t1:g}] s")
     best = (np.inf, np.nan, np.nan)
     for tau in taus:
         shape = 0.5 * a_z * np.clip(t - tau, 0.0, None) ** 2
@@ -104,25 +114,28 @@ def fit_start(t, h, a_z, until, taus=None):
         rms = float(np.sqrt(np.mean((h - shape - h0) ** 2)))
         if rms < best[0]:
             best = (rms, float(tau), h0)
+    if best[1] in (float(taus[0]), float(taus[-1])):
+        raise ValueError(f"the best start, {1000 * best[1]:+.1f} ms, is the edge of the times tried")
     return best[1], best[2], best[0]
 
 
-def _report(name, t, h, x, until):
-    a = surface_acceleration(x)
-    tau, h0, rms = fit_start(t, h, a, until)
-    drops = [h0 - float(np.interp(s, t, h)) for s in (0.05, 0.1, 0.15, 0.2)]
-    print(f"  {name}: water starts to move at t = {1000 * tau:+.1f} ms on its clock (fit over 0-{until:g} s, "
-          f"level {h0:.4f} m, rms {1000 * rms:.2f} mm); drop below that level at 0.05/0.1/0.15/0.2 s: "
-          + " / ".join(f"{1000 * d:.1f}" for d in drops) + " mm")
-    return tau
+def _window(text):
+    try:
+        t0, t1 = (float(v) for v in text.split("-"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected T0-T1 in s, e.g. 0.04-0.12") from None
+    if not 0 <= t0 < t1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected 0 <= T0 < T1")
+    return t0, t1
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("run_dir", type=Path, nargs="?", help="a run of cases/dam_break_obstacle_3d (its probes.csv)")
     ap.add_argument("--probe", default="H4", choices=sorted(PROBES), help="the depth probe in the reservoir")
-    ap.add_argument("--fit-until", type=float, default=0.1,
-                    help="end of the fitted span (s); (2) holds while g t^2 / 2 << H (default 0.1 s: 0.09 H)")
+    ap.add_argument("--windows", type=_window, nargs="+",
+                    default=[(0, 0.08), (0, 0.1), (0, 0.12), (0.02, 0.1), (0.04, 0.1), (0.04, 0.12), (0.05, 0.15)],
+                    help="fitted spans T0-T1 (s); (2) holds while g t^2 / 2 << H (at 0.1 s: 0.09 H)")
     args = ap.parse_args(argv)
     run = None
     if args.run_dir is not None:
@@ -145,10 +158,24 @@ def main(argv=None) -> int:
           f"starts at a_z = {a / G:.4f} g; drop a_z t^2 / 2 at 0.05/0.1/0.15/0.2 s: "
           + " / ".join(f"{1000 * surface_drop(x, s):.1f}" for s in (0.05, 0.1, 0.15, 0.2)) + " mm")
     exp = kleefsman()
-    tau_exp = _report("experiment (Kleefsman et al. 2005)", exp["t"], exp[args.probe], x, args.fit_until)
+    records = [("experiment", exp["t"], exp[args.probe])]
     if run is not None:
-        tau_run = _report(f"run {args.run_dir}", run["time"], run[args.probe], x, args.fit_until)
-        print(f"  the run's water starts {1000 * (tau_run - tau_exp):+.1f} ms after the experiment's, each on its clock")
+        records.append(("run", run["time"], run[args.probe]))
+    print("window (s)   " + "   ".join(f"{name}: start (ms), level (m), rms (mm)" for name, _, _ in records)
+          + ("   experiment's lead on the run (ms)" if run is not None else ""))
+    for t0, t1 in args.windows:
+        cells, taus = [], []
+        for _, t, h in records:
+            try:
+                tau, h0, rms = fit_start(t, h, a, t0, t1)
+            except ValueError as err:
+                cells.append(f"({err})")
+                taus.append(np.nan)
+                continue
+            cells.append(f"{1000 * tau:+6.1f} {h0:.4f} {1000 * rms:4.2f}")
+            taus.append(tau)
+        lead = f"   {1000 * (taus[1] - taus[0]):+6.1f}" if run is not None else ""
+        print(f"{t0:5.3g}-{t1:<5.3g}  " + "   ".join(cells) + lead)
     return 0
 
 
