@@ -65,6 +65,10 @@ def test_impulse_of_a_step_and_of_a_spike():
     spike[350] = 1e5
     assert mod.first_impulse(t, spike, ta) - mod.first_impulse(t, p, ta) == pytest.approx(95.0, rel=1e-9)
     assert mod.first_peak(t, spike, ta) == 1e5
+    # the 10 ms running mean: a step keeps its height, one 1 ms sample counts a tenth
+    assert mod.first_mean_peak(t, p, ta) == pytest.approx(5000.0, rel=1e-9)
+    lone = np.where(t == t[350], 1e5, 0.0)
+    assert mod.first_mean_peak(t, lone, 0.3) == pytest.approx(1e4, rel=1e-9)
 
 
 def test_a_missing_run_prints_one_line_and_exits_2(tmp_path, capsys):
