@@ -12,7 +12,8 @@ the run covers (or ``--span``):
   experiment alike: a constant delay from probe to probe is a clock, a growing one a speed;
 - pressure P1-P4: first-impact time, the first time p exceeds 2 kPa (about 18 % of P1's
   peak; the same threshold for run and experiment), and the peak over the first impact
-  (from that time to 0.2 s after it) in Pa, with the run's relative error;
+  (from that time to 0.2 s after it, or to the run's end if it ends sooner: the same
+  window length for run and experiment, printed) in Pa, with the run's relative error;
 - the peak of the 10 ms running mean over the same window (one 1 ms sample of an
   acoustic spike moves it by a tenth of its height);
 - the impulse of the first impact, int p dt over the same window (Pa s), with the run's
@@ -55,30 +56,30 @@ def arrival(t, p, threshold=IMPACT_PA):
     return float(t[above[0]]) if above.size else float("nan")
 
 
-def first_peak(t, p, t_arrival):
-    """Peak of p (Pa) within WINDOW_S after the first impact."""
+def first_peak(t, p, t_arrival, window=WINDOW_S):
+    """Peak of p (Pa) within ``window`` (s) after the first impact."""
     if not np.isfinite(t_arrival):
         return float("nan")
-    w = (t >= t_arrival) & (t <= t_arrival + WINDOW_S)
+    w = (t >= t_arrival) & (t <= t_arrival + window)
     return float(p[w].max())
 
 
-def first_mean_peak(t, p, t_arrival, width=MEAN_S):
+def first_mean_peak(t, p, t_arrival, width=MEAN_S, window=WINDOW_S):
     """Peak of the centred running mean of p over ``width`` (s; samples assumed evenly
-    spaced), within WINDOW_S after the first impact."""
+    spaced), within ``window`` (s) after the first impact."""
     if not np.isfinite(t_arrival) or t.size < 2:
         return float("nan")
     k = max(int(round(width / float(np.median(np.diff(t))))), 1)
     mean = np.convolve(p, np.ones(k) / k, mode="same")
-    w = (t >= t_arrival) & (t <= t_arrival + WINDOW_S)
+    w = (t >= t_arrival) & (t <= t_arrival + window)
     return float(mean[w].max())
 
 
-def first_impulse(t, p, t_arrival):
-    """int p dt (Pa s, trapezoidal) within WINDOW_S after the first impact."""
+def first_impulse(t, p, t_arrival, window=WINDOW_S):
+    """int p dt (Pa s, trapezoidal) within ``window`` (s) after the first impact."""
     if not np.isfinite(t_arrival):
         return float("nan")
-    w = (t >= t_arrival) & (t <= t_arrival + WINDOW_S)
+    w = (t >= t_arrival) & (t <= t_arrival + window)
     tw, pw = t[w], p[w]
     return float(np.sum(0.5 * (pw[1:] + pw[:-1]) * np.diff(tw)))
 
@@ -97,13 +98,17 @@ def compare(run: dict, exp: dict, span) -> dict:
     for p in ("P1", "P2", "P3", "P4"):
         if p in run:
             ta_run, ta_exp = arrival(t, run[p]), arrival(exp["t"], exp[p])
-            pk_run, pk_exp = first_peak(t, run[p], ta_run), first_peak(exp["t"], exp[p], ta_exp)
-            im_run, im_exp = first_impulse(t, run[p], ta_run), first_impulse(exp["t"], exp[p], ta_exp)
-            mp_run, mp_exp = first_mean_peak(t, run[p], ta_run), first_mean_peak(exp["t"], exp[p], ta_exp)
+            # the same window for both records: WINDOW_S, or what the run has after its arrival
+            win = min(WINDOW_S, float(t[-1]) - ta_run) if np.isfinite(ta_run) else WINDOW_S
+            pk_run, pk_exp = first_peak(t, run[p], ta_run, win), first_peak(exp["t"], exp[p], ta_exp, win)
+            im_run, im_exp = first_impulse(t, run[p], ta_run, win), first_impulse(exp["t"], exp[p], ta_exp, win)
+            mp_run, mp_exp = (first_mean_peak(t, run[p], ta_run, window=win),
+                              first_mean_peak(exp["t"], exp[p], ta_exp, window=win))
             out[p] = {"arrival_s": ta_run, "arrival_exp_s": ta_exp, "arrival_error_s": ta_run - ta_exp,
                       "peak_Pa": pk_run, "peak_exp_Pa": pk_exp, "peak_error": pk_run / pk_exp - 1.0,
                       "mean_peak_Pa": mp_run, "mean_peak_exp_Pa": mp_exp,
-                      "impulse_Pa_s": im_run, "impulse_exp_Pa_s": im_exp, "impulse_ratio": im_run / im_exp}
+                      "impulse_Pa_s": im_run, "impulse_exp_Pa_s": im_exp, "impulse_ratio": im_run / im_exp,
+                      "window_s": win}
     return out
 
 
@@ -156,7 +161,7 @@ def main(argv=None) -> int:
                   f"{r['arrival_exp_s']:.4f} s, error {r['arrival_error_s']:+.4f} s); peak {r['peak_Pa']:.0f} Pa "
                   f"(experiment {r['peak_exp_Pa']:.0f} Pa, {100 * r['peak_error']:+.0f} %); peak of the "
                   f"{1000 * MEAN_S:g} ms mean {r['mean_peak_Pa']:.0f} Pa (experiment {r['mean_peak_exp_Pa']:.0f} Pa); impulse over "
-                  f"{WINDOW_S:g} s {r['impulse_Pa_s']:.0f} Pa s (experiment {r['impulse_exp_Pa_s']:.0f} Pa s, "
+                  f"{r['window_s']:.3g} s {r['impulse_Pa_s']:.0f} Pa s (experiment {r['impulse_exp_Pa_s']:.0f} Pa s, "
                   f"ratio {r['impulse_ratio']:.2f})")
     plot(run, exp, args.run_dir)
     return 0

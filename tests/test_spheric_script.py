@@ -39,6 +39,20 @@ def test_the_experiment_scored_against_itself_is_perfect():
     assert 1000.0 < res["P1"]["impulse_exp_Pa_s"] < 2000.0
 
 
+def test_a_run_that_ends_early_is_scored_on_its_own_window():
+    """A record cut 0.1 s after P1's first impact, scored against the whole experiment:
+    every pressure figure uses the window the cut record has, for both, so the truncated
+    experiment still scores as perfect (impulse ratio 1, not 0.1 / 0.2 of it)."""
+    mod, exp = _script(), kleefsman()
+    cut = _as_run(exp, t1=0.395 + 0.1)
+    res = mod.compare(cut, exp, None)
+    r = res["P1"]
+    assert r["window_s"] == pytest.approx(0.1, abs=0.0015)
+    assert r["impulse_ratio"] == pytest.approx(1.0, rel=1e-12)
+    assert r["peak_error"] == 0.0
+    assert r["mean_peak_Pa"] == pytest.approx(r["mean_peak_exp_Pa"], rel=1e-12)
+
+
 def test_a_record_run_late_shows_its_delay_at_every_probe():
     """The experiment played 25 ms late: every front arrival and every first impact reads
     +25 ms (within one 1 ms sample), so a clock offset shows as a constant delay."""
