@@ -79,9 +79,10 @@ def surface_acceleration(x, depth=DEPTH, length=LENGTH, g=G, terms=20000):
     return out if out.size > 1 else float(out[0])
 
 
-def face_potential(z, depth=DEPTH, length=LENGTH, terms=20000):
+def face_q(z, depth=DEPTH, terms=20000):
     """q(0, z) of the series (the pressure's departure from hydrostatic over rho g, on the
-    released face); the boundary condition is q(0, z) = -(H - z). For the tests."""
+    released face, where the cosh ratio is 1 whatever L); the boundary condition is
+    q(0, z) = -(H - z). For the tests."""
     z = np.atleast_1d(np.asarray(z, dtype=float))
     n = np.arange(terms)
     k = (2 * n + 1) * np.pi / (2 * depth)
