@@ -56,30 +56,34 @@ def arrival(t, p, threshold=IMPACT_PA):
     return float(t[above[0]]) if above.size else float("nan")
 
 
+def _after(t, t_arrival, window):
+    """The samples within ``window`` (s) after the first impact; None without one."""
+    if not np.isfinite(t_arrival):
+        return None
+    return (t >= t_arrival) & (t <= t_arrival + window)
+
+
 def first_peak(t, p, t_arrival, window=WINDOW_S):
     """Peak of p (Pa) within ``window`` (s) after the first impact."""
-    if not np.isfinite(t_arrival):
-        return float("nan")
-    w = (t >= t_arrival) & (t <= t_arrival + window)
-    return float(p[w].max())
+    w = _after(t, t_arrival, window)
+    return float("nan") if w is None else float(p[w].max())
 
 
 def first_mean_peak(t, p, t_arrival, width=MEAN_S, window=WINDOW_S):
     """Peak of the centred running mean of p over ``width`` (s; samples assumed evenly
     spaced), within ``window`` (s) after the first impact."""
-    if not np.isfinite(t_arrival) or t.size < 2:
+    w = _after(t, t_arrival, window)
+    if w is None or t.size < 2:
         return float("nan")
     k = max(int(round(width / float(np.median(np.diff(t))))), 1)
-    mean = np.convolve(p, np.ones(k) / k, mode="same")
-    w = (t >= t_arrival) & (t <= t_arrival + window)
-    return float(mean[w].max())
+    return float(np.convolve(p, np.ones(k) / k, mode="same")[w].max())
 
 
 def first_impulse(t, p, t_arrival, window=WINDOW_S):
     """int p dt (Pa s, trapezoidal) within ``window`` (s) after the first impact."""
-    if not np.isfinite(t_arrival):
+    w = _after(t, t_arrival, window)
+    if w is None:
         return float("nan")
-    w = (t >= t_arrival) & (t <= t_arrival + window)
     tw, pw = t[w], p[w]
     return float(np.sum(0.5 * (pw[1:] + pw[:-1]) * np.diff(tw)))
 

@@ -57,7 +57,7 @@ def test_a_record_run_late_shows_its_delay_at_every_probe():
     """The experiment played 25 ms late: every front arrival and every first impact reads
     +25 ms (within one 1 ms sample), so a clock offset shows as a constant delay."""
     mod, exp = _script(), kleefsman()
-    late = {k: v for k, v in _as_run(exp).items()}
+    late = _as_run(exp)
     late["time"] = late["time"] + 0.025
     res = mod.compare(late, exp, None)
     for h in ("H1", "H2", "H3"):
