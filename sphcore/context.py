@@ -60,7 +60,8 @@ class RunContext:
         self.counters: Counter = Counter()
         self._stats: dict[str, dict] = {}
         self._kept: dict[str, dict] = {}
-        self._name_of = plugin_name or (lambda plugin: type(plugin).__name__)
+        self._plugin_name = plugin_name or (lambda plugin: type(plugin).__name__)
+        self._names: dict[int, tuple] = {}  # id(plugin) -> (plugin, name): see _name_of
         self._pressure = None  # the force pressure owner (sphcore.forces.PressureField)
         self._rates = None  # the integrator (owns the accelerations)
 
@@ -84,6 +85,15 @@ class RunContext:
     def kept(self, plugin) -> dict:
         """State of ``plugin`` that a checkpoint keeps and a restart restores."""
         return self._kept.setdefault(plugin if isinstance(plugin, str) else self._name_of(plugin), {})
+
+    def _name_of(self, plugin) -> str:
+        """The registered name of ``plugin``, looked up once per plugin (pluggy's lookup walks
+        every registered plugin; the reflective walls ask on every step). The plugin is kept
+        beside its name, so that its id is not reused while the entry exists."""
+        entry = self._names.get(id(plugin))
+        if entry is None:
+            entry = self._names[id(plugin)] = (plugin, self._plugin_name(plugin))
+        return entry[1]
 
     def all_stats(self) -> dict[str, dict]:
         """Every plugin's figures, by plugin name (only those that have any)."""

@@ -235,10 +235,33 @@ def _no_implementation(**kwargs):
     return []
 
 
+def _no_first_result(**kwargs):
+    return None
+
+
+def _direct_call(impl, firstresult: bool):
+    """The call pluggy makes for a hook with the single implementation ``impl`` (no
+    wrapper): its arguments by name, a result of None dropped (a first-result hook returns
+    the result itself). Exceptions pass through as pluggy passes them."""
+    function, argnames = impl.function, tuple(impl.argnames)
+
+    def call(**kwargs):
+        result = function(*[kwargs[a] for a in argnames])
+        if firstresult:
+            return result
+        return [] if result is None else [result]
+
+    return call
+
+
 class HookRelay:
-    """``pm.hook`` for the time loop: a hook that no registered plugin implements is a
-    plain function returning [] instead of a pluggy call (~25 us each, seven per step),
-    so hooks that do nothing cost nothing. Built once the run's plugins are registered."""
+    """``pm.hook`` for the time loop. A hook that no registered plugin implements is a plain
+    function returning [] instead of a pluggy call (~25 us each, seven per step), so hooks
+    that do nothing cost nothing; a hook with one implementation and no wrapper calls it
+    directly, as pluggy would, without pluggy's dispatch (PySPH's dam break: the reflective
+    walls' ``sph_after_integrate`` on every step). Hooks with several implementations or a
+    wrapper go through pluggy. Built once the run's plugins are registered; pluggy's call
+    tracing (``pm.enable_tracing``) sees only the hooks that go through it."""
 
     def __init__(self, pm: pluggy.PluginManager):
         self.implemented = set()
@@ -246,8 +269,11 @@ class HookRelay:
             if not name.startswith("sph_"):
                 continue
             caller = getattr(pm.hook, name)
-            if caller.get_hookimpls():
-                self.implemented.add(name)
-                setattr(self, name, caller)
-            else:
-                setattr(self, name, _no_implementation)
+            impls = caller.get_hookimpls()
+            firstresult = bool(caller.spec and caller.spec.opts.get("firstresult"))
+            if not impls:
+                setattr(self, name, _no_first_result if firstresult else _no_implementation)
+                continue
+            self.implemented.add(name)
+            single = len(impls) == 1 and not (impls[0].hookwrapper or getattr(impls[0], "wrapper", False))
+            setattr(self, name, _direct_call(impls[0], firstresult) if single else caller)
