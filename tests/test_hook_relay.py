@@ -97,3 +97,17 @@ def test_a_wrapper_goes_through_pluggy():
     relay = HookRelay(pm)
     assert relay.sph_step is pm.hook.sph_step
     assert relay.sph_step(ctx=None, x=3) == [6] and w.seen == [3]
+
+
+class OldWrapper:
+    @impl(hookwrapper=True)
+    def sph_step(self, x):
+        yield
+
+
+@pytest.mark.parametrize("make", [Wrapper, OldWrapper])
+def test_a_lone_wrapper_goes_through_pluggy(make):
+    pm = manager(make())
+    relay = HookRelay(pm)
+    assert relay.sph_step is pm.hook.sph_step
+    assert relay.sph_step(ctx=None, x=3) == pm.hook.sph_step(ctx=None, x=3) == []
