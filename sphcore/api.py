@@ -18,7 +18,8 @@
   :class:`Grid`), :func:`cell_of`, :func:`cell_range` (the one neighbour walk),
   :func:`kernel_w`, :func:`kernel_f`, :data:`SUPPORT`, the kernel ids;
 - :class:`by_size` (a prange kernel compiled serial and parallel, run parallel only where
-  it pays);
+  it pays) and :func:`on_threads_by_size` (a kernel with one prange loop, run on one thread where
+  a launch would cost more than the work);
 - the equation of state: :mod:`sphcore.eos` as :data:`eos`;
 - output: :class:`ScheduledWriter` (base of a writer plugin: schedule, restart, write errors),
   :class:`Schedule`, :func:`write_atomically` (a file replaced whole or not at all).
@@ -41,7 +42,7 @@ from .kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, k
 from .neighbours import CellGrid, Grid, cell_of, cell_range
 from .options import Option, validate_table
 from .outdir import write_atomically
-from .parallel import by_size
+from .parallel import by_size, on_threads_by_size
 from .params import Params
 from .particles import FLUID, GHOST, SPHERE, ParticleState, Sources
 from .schedule import Schedule, schedule_options
@@ -54,5 +55,5 @@ __all__ = [
     "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "face_distance", "first_contact",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
     "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",
-    "eos", "ScheduledWriter", "Schedule", "schedule_options", "write_atomically", "by_size",
+    "eos", "ScheduledWriter", "Schedule", "schedule_options", "write_atomically", "by_size", "on_threads_by_size",
 ]

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import types
 
+import numba
 from numba import njit
 
 PARALLEL_MIN = 20_000  # particles (rows of the first argument)
@@ -46,6 +47,26 @@ def twin(pyfunc, suffix: str, **constants):
     f.__doc__ = pyfunc.__doc__
     f.__module__ = pyfunc.__module__
     return f
+
+
+def on_threads_by_size(n: int, minimum: int, kernel, *args):
+    """``kernel(*args)``, a ``parallel=True`` kernel whose loop runs over n items, on one thread
+    when n < ``minimum`` (a launch on one thread costs no more than a plain loop), else on
+    the count set. One prange loop then serves both sizes: a serial copy of a large loop body
+    beside the parallel one doubles what numba compiles, and its parallel passes grow faster
+    than the body (the wall model's plane terms: 107 -> 45 s to compile). The thread count
+    is set from Python: numba cannot cache a kernel that sets it. Use it where the loop's
+    iterations are independent (the result does not depend on the thread count)."""
+    if n >= minimum:
+        return kernel(*args)
+    before = numba.get_num_threads()
+    if before == 1:
+        return kernel(*args)
+    numba.set_num_threads(1)
+    try:
+        return kernel(*args)
+    finally:
+        numba.set_num_threads(before)
 
 
 def serial_and_parallel(pyfunc, **njit_options):

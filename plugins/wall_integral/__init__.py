@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.api import CaseError, Option, hookimpl
+from sphcore.api import CaseError, Option, hookimpl, on_threads_by_size
 
 
 class WallIntegralPlugin:
@@ -92,7 +92,7 @@ class WallIntegralPlugin:
         # the kernels are imported on first use: every run loads every installed plugin to
         # validate its tables, and these modules build their tables at import (~0.15 s)
         from .lattice import lattice_error_tables
-        from .planes import add_plane_terms, near_planes
+        from .planes import PARALLEL_NEAR, add_plane_terms, near_planes
 
         st, prm = ctx.state, ctx.params
         n, dim = st.n, prm.dim
@@ -102,9 +102,9 @@ class WallIntegralPlugin:
             self._table = lattice_error_tables(prm.kernel_id, prm.h, prm.dx, dim, prm.moment_norm)
         # the terms of the planes, for the particles within 2h of one (the core zeroed the arrays)
         count = near_planes(st.pos, self.normals, self.offsets, prm.support, self._near)
-        add_plane_terms(self._near, count, st.pos, self.normals, self.offsets, prm.kernel_id, prm.h, prm.gravity,
-                        *self._table, prm.support, prm.moment_norm, terms.share, terms.grad, terms.hydro,
-                        terms.fill, terms.normals)
+        on_threads_by_size(count, PARALLEL_NEAR, add_plane_terms, self._near, count, st.pos, self.normals,
+                           self.offsets, prm.kernel_id, prm.h, prm.gravity, *self._table, prm.support,
+                           prm.moment_norm, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
         if self.walls is not None:
             self._add_face_terms(ctx, terms)
         ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(terms.share))

@@ -87,7 +87,7 @@ def lattice_error_tables(kernel_id: int, h: float, dx: float, dim: int, lam: flo
     return (nodes, *tabs)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _locate(nodes, d):
     """(index, fraction) of d between nodes, clamped to the first and last node."""
     K = nodes.shape[0]
