@@ -76,7 +76,7 @@ def build_table(verts, grid, kernel_id, h, gravity, spacing, max_nodes) -> FaceT
 def _fill(lo, spacing, shape, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, kernel_id, h, gravity, tab):
     nodes = tab.shape[0]
     rows = stamps.shape[0]
-    q0 = np.zeros((3, 3))  # no other plugin's directions: the faces' own projector is stored
+    q0 = np.zeros((dim, dim))  # no other plugin's directions: the faces' own projector is stored
     for b in prange(rows):
         for m in range(b * nodes // rows, (b + 1) * nodes // rows):
             k = m % shape[2]
@@ -86,8 +86,8 @@ def _fill(lo, spacing, shape, dim, verts, glo, ginv, gshape, gstart, gitems, sta
             x1 = lo[1] + j * spacing
             x2 = lo[2] + k * spacing if dim == 3 else 0.0
             near, s, gr0, gr1, gr2, t0, t1, t2, basis, count = point_terms(
-                x0, x1, x2, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, b, m, kernel_id, h, gravity,
-                q0[:dim, :dim])
+                x0, x1, x2, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), m, kernel_id, h,
+                gravity, q0)
             if near == 0:
                 continue
             if s < -1e-6:

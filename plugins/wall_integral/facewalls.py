@@ -45,8 +45,8 @@ def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, epoch
             x0, x1 = pos[i, 0], pos[i, 1]
             x2 = pos[i, 2] if dim == 3 else 0.0
             near, s, gr0, gr1, gr2, t0, t1, t2, basis, count = point_terms(
-                x0, x1, x2, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, b, first_mark + i, kernel_id, h,
-                gravity, q[i])
+                x0, x1, x2, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), first_mark + i,
+                kernel_id, h, gravity, q[i])
             if near == 0:
                 continue
             _add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill)
