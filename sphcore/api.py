@@ -19,7 +19,7 @@
   :func:`kernel_w`, :func:`kernel_f`, :data:`SUPPORT`, the kernel ids;
 - :class:`by_size` (a prange kernel compiled serial and parallel, run parallel only where
   it pays) and :func:`on_threads_by_size` (a kernel with one prange loop, run on one thread where
-  a launch would cost more than the work);
+  a launch on several would cost more than the work);
 - the equation of state: :mod:`sphcore.eos` as :data:`eos`;
 - output: :class:`ScheduledWriter` (base of a writer plugin: schedule, restart, write errors),
   :class:`Schedule`, :func:`write_atomically` (a file replaced whole or not at all).

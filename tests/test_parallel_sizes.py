@@ -41,7 +41,7 @@ def _threads_seen(seen):
         seen.append(numba.get_num_threads())
         if x is None:
             raise RuntimeError("a failing kernel")
-        return x + 1
+        return x + 10
     return kernel
 
 
@@ -52,13 +52,15 @@ def test_small_calls_run_on_one_thread_and_the_count_is_restored():
     try:
         seen = []
         kernel = _threads_seen(seen)
-        assert on_threads_by_size(10, 100, kernel, 1) == 2
-        assert on_threads_by_size(100, 100, kernel, 1) == 2
+        assert on_threads_by_size(10, 100, kernel, 1) == 11
+        assert on_threads_by_size(100, 100, kernel, 1) == 11
         assert seen == [1, 2]
         assert numba.get_num_threads() == 2
         with pytest.raises(RuntimeError):
             on_threads_by_size(10, 100, kernel, None)
         assert numba.get_num_threads() == 2  # restored after an error too
+        numba.set_num_threads(1)
+        assert on_threads_by_size(10, 100, kernel, 1) == 11 and numba.get_num_threads() == 1
     finally:
         numba.set_num_threads(before)
 
@@ -80,9 +82,8 @@ def test_the_plane_terms_give_the_same_bits_on_one_thread_and_two(tmp_path, monk
     args = list(captured[-1])
     n = sim.state.n
     assert args[1] > 100  # particles near the walls were listed
-    # every particle, listed or not (a far one gets nothing added), past PARALLEL_NEAR
+    # every particle, listed or not (a far one gets nothing added)
     args[0], args[1] = np.arange(n, dtype=np.int64), n
-    assert n >= planes.PARALLEL_NEAR
     results = []
     before = numba.get_num_threads()
     try:

@@ -102,9 +102,10 @@ class WallIntegralPlugin:
             self._table = lattice_error_tables(prm.kernel_id, prm.h, prm.dx, dim, prm.moment_norm)
         # the terms of the planes, for the particles within 2h of one (the core zeroed the arrays)
         count = near_planes(st.pos, self.normals, self.offsets, prm.support, self._near)
-        on_threads_by_size(count, PARALLEL_NEAR, add_plane_terms, self._near, count, st.pos, self.normals,
-                           self.offsets, prm.kernel_id, prm.h, prm.gravity, *self._table, prm.support,
-                           prm.moment_norm, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
+        if count:  # no particle near a plane (a tank of faces alone): no launch
+            on_threads_by_size(count, PARALLEL_NEAR, add_plane_terms, self._near, count, st.pos, self.normals,
+                               self.offsets, prm.kernel_id, prm.h, prm.gravity, *self._table, prm.support,
+                               prm.moment_norm, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
         if self.walls is not None:
             self._add_face_terms(ctx, terms)
         ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(terms.share))
