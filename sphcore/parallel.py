@@ -50,13 +50,15 @@ def twin(pyfunc, suffix: str, **constants):
 
 
 def on_threads_by_size(n: int, minimum: int, kernel, *args):
-    """``kernel(*args)``, a ``parallel=True`` kernel whose loop runs over n items, on one thread
-    when n < ``minimum`` (with OpenMP, sphcore's threading layer, a launch on one thread cost
-    no more than a plain loop: docs/speed.md), else on
-    the count set. One prange loop then serves both sizes: a serial copy of a large loop body
-    beside the parallel one doubles what numba compiles, and its parallel passes grow faster
-    than the body (the wall model's plane terms: 107-118 -> 48-67 s to compile). The thread count
-    is set from Python: numba cannot cache a kernel that sets it. Use it where the loop's
+    """``kernel(*args)``, a ``parallel=True`` kernel whose loop runs over n items, on one
+    thread when n < ``minimum``, else on the count set; the count is restored after the call.
+
+    One prange loop then serves both sizes, where :class:`by_size` compiles a serial and a
+    parallel build: a serial copy of a large loop body beside the parallel one doubles what
+    numba compiles, and its parallel passes grow faster than the body (the wall model's
+    plane terms: 107-118 -> 48-67 s to compile; with OpenMP, sphcore's threading layer, the
+    one-thread call ran as fast as the serial loop: docs/speed.md). The count is set from
+    Python because numba cannot cache a kernel that sets it. Use it where the loop's
     iterations are independent (the result does not depend on the thread count)."""
     if n >= minimum:
         return kernel(*args)
