@@ -44,10 +44,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from .corrections import _corrected
 from .eos import _power
-from .kernels import kernel_f_of_q, kernel_f_scale, kernel_w
-from .neighbours import candidates_bound, forward_pairs, forward_rows, listed_pairs, separation
+from .neighbours import candidates_bound, forward_pairs, forward_rows, listed_pairs
+from .pairterms import GATHER_ROWS, OUT_ROWS, constants, fused_partners, gather, scatter, terms
 from .parallel import PARALLEL_MIN, twin
 from .wall_completion import _complete_at_wall
 
@@ -96,6 +95,7 @@ class WallTerms(NamedTuple):
 # whether wall terms are supplied (WallTerms.active)
 DIM = None
 WALLS = None
+THREE_PASS = None  # walk a particle's partners in three passes (sphcore.pairterms): in 3D
 
 
 def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
@@ -121,7 +121,10 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
 
     The pair loop is compiled once per dimension and for runs with and without wall terms
     (``_RATES``), each a constant of its build: 0.44 -> 0.35-0.36 ms per call of the seed's
-    dam break on one thread (dimension), -> 0.351-0.357 (wall terms), the same bits.
+    dam break on one thread (dimension), -> 0.351-0.357 (wall terms), the same bits. The
+    terms of a pair are :func:`sphcore.pairterms.pair_terms`; 2D walks a particle's partners
+    in one fused loop, 3D in three passes whose middle one is vectorised (the measurements
+    are in :mod:`sphcore.pairterms`), the same bits either way.
     """
     _RATES[src.pos.shape[1], bool(wall.active)](n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth)
 
@@ -144,8 +147,12 @@ def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     nbuf = candidates_bound(grid)
     nrow = grid.nbr.shape[1] // 2 + 1  # forward stencil rows, at most
     # scratch per thread, allocated once per call: one particle's partners, the rows of a cell
-    buf = np.empty((nth if n_src >= PAIRS_PARALLEL_MIN else 1, nbuf), np.int64)
-    rows = np.empty((buf.shape[0], nrow, 2), np.int64)
+    nt = nth if n_src >= PAIRS_PARALLEL_MIN else 1
+    buf = np.empty((nt, nbuf), np.int64)
+    rows = np.empty((nt, nrow, 2), np.int64)
+    nrow3 = nbuf if THREE_PASS else 0  # the three-pass walk's rows (sphcore.pairterms)
+    gat = np.empty((nt, GATHER_ROWS, nrow3))
+    out = np.empty((nt, OUT_ROWS, nrow3))
     # The slabs differ in size (water on a floor: the bottom layers hold most particles),
     # so thread k takes every nth slab of a phase, k, k + nth, ..., rather than a contiguous
     # block; one task per thread, so its scratch is allocated once per call, not per slab
@@ -163,14 +170,14 @@ def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
             for u in range(ntask):
                 s = 2 * u + phase
                 _slab_pairs(slab_start[s], slab_start[s + 1], n_dest, src, grid, prm, L, wall, acc, drho, work, spos,
-                            buf[0], rows[0])
+                            buf[0], rows[0], gat[0], out[0])
             continue
         # one task per thread: thread k takes the slabs u = k, k + nth, k + 2 nth, ...
         for k in prange(nth):
             for u in range(k, ntask, nth):
                 s = 2 * u + phase
                 _slab_pairs(slab_start[s], slab_start[s + 1], n_dest, src, grid, prm, L, wall, acc, drho, work,
-                            spos, buf[k], rows[k])
+                            spos, buf[k], rows[k], gat[k], out[k])
     if n_dest >= PARALLEL_MIN:
         for i in prange(n_dest):
             _finish(i, dim, WALLS, src, prm, wall, acc, drho, work)
@@ -209,152 +216,54 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
             work[i, 8] = gp
 
 
-def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf, rows):
+def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf, rows, gat, out):
     """The pairs of the occupied cells c_first <= c < c_end with themselves and their
     forward neighbours, both ways; ``buf``: scratch for one particle's partners
     (:func:`sphcore.neighbours.forward_pairs`), ``rows`` for a cell's forward stencil rows
-    (:func:`sphcore.neighbours.forward_rows`). One call per slab, not per cell: a call
-    passes every field of src, grid, prm and wall (0.67 -> 0.63 ms per evaluation of the
-    seed's dam break, one thread)."""
-    pos, vel, rho, p, m = src
+    (:func:`sphcore.neighbours.forward_rows`), ``gat`` and ``out`` for the three-pass walk
+    of the partners (:mod:`sphcore.pairterms`: in 3D; 2D walks them fused). One call per
+    slab, not per cell: a call passes every field of src, grid, prm and wall (0.67 -> 0.63
+    ms per evaluation of the seed's dam break, one thread)."""
     dim = DIM
-    h, c0 = prm.h, prm.c0
-    alpha, beta, nu, delta, eta2 = prm.alpha, prm.beta, prm.nu, prm.delta, prm.eta2
-    gravity = prm.gravity
-    kid = prm.kernel_id
-    inv_h = 1.0 / h
-    fscale = kernel_f_scale(kid, h, dim)
-    r2max = prm.support * prm.support
-    do_av = alpha > 0.0 or beta > 0.0
-    do_lam = nu > 0.0
-    do_diff = delta > 0.0
-    any_visc = do_av or do_lam or do_diff
-    diff_h = do_diff and prm.diffusion_hydrostatic  # k_ij g . x_ij subtracted from psi_ij
-    dcoef = 2.0 * delta * h * c0
-    use_L = prm.kernel_gradient
-    n_L = L.shape[0] if use_L else 0
     walls = WALLS
+    pos, vel, rho, p, m = src
+    kid, h = prm.kernel_id, prm.h
     # gravity in scalars: loads from an array inside the loop are repeated after every
     # store to acc/drho/work, which the compiler cannot prove do not alias it
-    gv0, gv1, gv2 = gravity[0], gravity[1], gravity[2]
+    gv0, gv1, gv2 = prm.gravity[0], prm.gravity[1], prm.gravity[2]
+    share = wall.share
+    r2max = prm.support * prm.support
+    n_L = L.shape[0] if prm.kernel_gradient else 0
+    consts = constants(prm, dim)
     order, cell_start = grid.order, grid.cell_start
     pair_start, pair_cand = grid.pair_start, grid.pair_cand
     use_list = pair_start.shape[0] > 0  # partners from a kept pair list, else from the cells
+    Li = np.empty(9)  # L_i row-major, or none (a source beyond L): kernel gradient correction
+    no_L = np.empty(0)
     for c in range(c_first, c_end):
         nrows = 0 if use_list else forward_rows(c, grid, dim, rows)
         for k in range(cell_start[c], cell_start[c + 1]):
             i = order[k]
-            di = i < n_dest
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            dr = 0.0
-            gam = 0.0  # sum_j V_j W_ij, the particle's own neighbour sum (wall completion)
-            b0 = 0.0  # b = sum_j V_j grad_i W_ij (x_j - x_i) . g, for the wall completion
-            b1 = 0.0
-            b2 = 0.0
-            rho_i = rho[i]
-            m_i = m[i]
-            pi_r = work[i, 4]
-            irho_i = work[i, 5]
-            vol_i = work[i, 7]  # density diffusion: m_i / rho_i, k_i / 2, g . x_i
-            kh_i = work[i, 6]
-            gp_i = work[i, 8]
-            near_i = walls and di and wall.share[i] > 0.0
-            # particle i's velocity in scalars, loaded once (as gravity above)
-            vi0, vi1 = vel[i, 0], vel[i, 1]
-            vi2 = vel[i, 2] if dim == 3 else 0.0
             if use_list:
                 npart = listed_pairs(k, spos, order, pair_start, pair_cand, r2max, buf)
             else:
                 npart = forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf)
-            for u in range(npart):
-                j = buf[u]
-                dj = j < n_dest
-                x0, x1, x2, r2 = separation(pos, i, j, dim)
-                r = np.sqrt(r2)
-                f = fscale * kernel_f_of_q(kid, r * inv_h)
-                g0 = f * x0  # grad_i W_ij = -grad_j W_ji
-                g1 = f * x1
-                g2 = f * x2
-                if use_L:
-                    g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
-                v0 = vi0 - vel[j, 0]
-                v1 = vi1 - vel[j, 1]
-                v2 = vi2 - vel[j, 2] if dim == 3 else 0.0
-                m_j = m[j]
-                vg = v0 * g0 + v1 * g1 + v2 * g2  # v_ij . grad_i W_ij = v_ji . grad_j W_ji
-                dr_i = m_j * vg
-                dr_j = m_i * vg
-                s = pi_r + work[j, 4]
-                e0 = 0.0
-                e1 = 0.0
-                e2 = 0.0
-                if any_visc:
-                    xg = x0 * g0 + x1 * g1 + x2 * g2  # x_ij . grad_i W_ij (< 0)
-                    ir2 = 1.0 / (r2 + eta2)
-                    rho_j = rho[j]
-                    if do_diff:
-                        psi = rho_i - rho_j  # psi_ji = -psi_ij
-                        if diff_h:
-                            psi -= (kh_i + work[j, 6]) * (gp_i - work[j, 8])
-                        cd = dcoef * psi * xg * ir2
-                        dr_i += cd * work[j, 7]
-                        dr_j -= cd * vol_i
-                    if do_av:
-                        # approaching pairs only (v_ij . x_ij < 0); min() rather than a branch,
-                        # which the CPU would mispredict for half the pairs of a flow
-                        mu = h * min(v0 * x0 + v1 * x1 + v2 * x2, 0.0) * ir2
-                        s += (-alpha * c0 * mu + beta * mu * mu) * 2.0 / (rho_i + rho_j)
-                    if do_lam:
-                        lam = 4.0 * nu / (rho_i + rho_j) * xg * ir2
-                        e0 = -lam * v0
-                        e1 = -lam * v1
-                        e2 = -lam * v2
-                # pressure, artificial and laminar viscosity: -m_j e on i, +m_i e on j
-                e0 += s * g0
-                e1 += s * g1
-                e2 += s * g2
-                near_j = walls and dj and wall.share[j] > 0.0
-                w = 0.0
-                gx = 0.0
-                if near_i or near_j:
-                    w = kernel_w(kid, r, h, dim)
-                    gx = -(x0 * gv0 + x1 * gv1 + x2 * gv2)
-                if di:
-                    a0 -= m_j * e0
-                    a1 -= m_j * e1
-                    a2 -= m_j * e2
-                    dr += dr_i
-                    if near_i:
-                        vj = m_j * work[j, 5]
-                        gam += vj * w
-                        b0 += vj * gx * g0
-                        b1 += vj * gx * g1
-                        b2 += vj * gx * g2
-                if dj:
-                    acc[j, 0] += m_i * e0
-                    acc[j, 1] += m_i * e1
-                    if dim == 3:
-                        acc[j, 2] += m_i * e2
-                    drho[j] += dr_j
-                    if near_j:
-                        vi = m_i * irho_i
-                        work[j, 0] += vi * w
-                        work[j, 1] += vi * gx * g0
-                        work[j, 2] += vi * gx * g1
-                        work[j, 3] += vi * gx * g2
-            if di:
-                acc[i, 0] += a0
-                acc[i, 1] += a1
-                if dim == 3:
-                    acc[i, 2] += a2
-                drho[i] += dr
-                if near_i:
-                    work[i, 0] += gam
-                    work[i, 1] += b0
-                    work[i, 2] += b1
-                    work[i, 3] += b2
+            if not THREE_PASS:
+                fused_partners(i, npart, buf, n_dest, dim, walls, pos, vel, rho, m, kid, gv0, gv1, gv2, consts, L, n_L,
+                               share, acc, drho, work)
+                continue
+            gather(i, npart, buf, dim, pos, vel, rho, m, work, consts, L, n_L, gat)
+            pr_i, vol_i, kh_i, gp_i = work[i, 4], work[i, 7], work[i, 6], work[i, 8]
+            # with the correction and without: the compiler vectorises the second loop only
+            # when the correction's loads are not in it
+            if n_L > 0:
+                for e in range(9):
+                    Li[e] = L[i, e // 3, e % 3] if i < n_L else 0.0
+                terms(npart, dim, walls, kid, consts, rho[i], m[i], pr_i, vol_i, kh_i, gp_i, True,
+                      Li if i < n_L else no_L, gat, out)
+            else:
+                terms(npart, dim, walls, kid, consts, rho[i], m[i], pr_i, vol_i, kh_i, gp_i, False, no_L, gat, out)
+            scatter(i, npart, buf, n_dest, dim, walls, kid, h, gv0, gv1, gv2, share, m[i], acc, drho, work, gat, out)
 
 
 @njit(cache=True, inline="always")
@@ -391,8 +300,12 @@ def uniform_acceleration(gravity, acc):
 
 def _build(dim: int, walls: bool):
     name = f"_{dim}d" + ("_walls" if walls else "")
-    pairs = njit(cache=True)(twin(_slab_pairs, name, DIM=dim, WALLS=walls))
-    return njit(cache=True, parallel=True)(twin(_sph_rates, name, DIM=dim, WALLS=walls, _slab_pairs=pairs))
+    three = dim == 3
+    # error_model="numpy": a float division by zero gives inf instead of raising, so that the
+    # three-pass loop, which divides, can be vectorised (the checks catch what is not finite)
+    pairs = njit(cache=True, error_model="numpy")(twin(_slab_pairs, name, DIM=dim, WALLS=walls, THREE_PASS=three))
+    return njit(cache=True, parallel=True, error_model="numpy")(
+        twin(_sph_rates, name, DIM=dim, WALLS=walls, THREE_PASS=three, _slab_pairs=pairs))
 
 
 _RATES = {(dim, walls): _build(dim, walls) for dim in (2, 3) for walls in (False, True)}
