@@ -91,8 +91,8 @@ class WallTerms(NamedTuple):
     active: bool
 
 
-# constants of each compiled twin of the pair loop (see the end): the spatial dimension, and
-# whether wall terms are supplied (WallTerms.active)
+# constants of each compiled twin of the pair loop (see the end): the spatial dimension,
+# whether wall terms are supplied (WallTerms.active), and how the partners are walked
 DIM = None
 WALLS = None
 THREE_PASS = None  # walk a particle's partners in three passes (sphcore.pairterms): in 3D
@@ -226,7 +226,7 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
     ms per evaluation of the seed's dam break, one thread)."""
     dim = DIM
     walls = WALLS
-    pos, vel, rho, p, m = src
+    pos, vel, rho, _, m = src
     kid, h = prm.kernel_id, prm.h
     # gravity in scalars: loads from an array inside the loop are repeated after every
     # store to acc/drho/work, which the compiler cannot prove do not alias it
@@ -257,8 +257,9 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
             # with the correction and without: the compiler vectorises the second loop only
             # when the correction's loads are not in it
             if n_L > 0:
-                for e in range(9):
-                    Li[e] = L[i, e // 3, e % 3] if i < n_L else 0.0
+                if i < n_L:
+                    for e in range(9):
+                        Li[e] = L[i, e // 3, e % 3]
                 terms(npart, dim, walls, kid, consts, rho[i], m[i], pr_i, vol_i, kh_i, gp_i, True,
                       Li if i < n_L else no_L, gat, out)
             else:
@@ -294,15 +295,21 @@ def uniform_acceleration(gravity, acc):
             acc[i, d] = gravity[d]
 
 
-# the pair loop compiled per dimension and with or without wall terms: DIM and WALLS are
-# constants in each twin (sphcore.parallel.twin); numba compiles each on its first call
+# the pair loop compiled per dimension and with or without wall terms: DIM, WALLS and
+# THREE_PASS are constants in each twin (sphcore.parallel.twin); numba compiles each on its
+# first call
 
 
-def _build(dim: int, walls: bool):
-    name = f"_{dim}d" + ("_walls" if walls else "")
-    three = dim == 3
-    # error_model="numpy": a float division by zero gives inf instead of raising, so that the
-    # three-pass loop, which divides, can be vectorised (the checks catch what is not finite)
+def _build(dim: int, walls: bool, three_pass: bool | None = None):
+    """The pair loop's twin for ``dim`` and ``walls``; ``three_pass`` (default: in 3D) walks
+    the partners in three passes, else fused (the other walk is built by the tests only, to
+    check that both give the same bits)."""
+    three = dim == 3 if three_pass is None else three_pass
+    name = f"_{dim}d" + ("_walls" if walls else "") + ("" if three == (dim == 3) else ("_three" if three else "_fused"))
+    # error_model="numpy" in every twin, 2D and 3D, and in the passes before and after the
+    # pairs (_prepare, _finish, inlined here): a float division by zero gives inf instead of
+    # raising, so that the three-pass loop, which divides, can be vectorised (the checks
+    # after the step catch what is not finite)
     pairs = njit(cache=True, error_model="numpy")(twin(_slab_pairs, name, DIM=dim, WALLS=walls, THREE_PASS=three))
     return njit(cache=True, parallel=True, error_model="numpy")(
         twin(_sph_rates, name, DIM=dim, WALLS=walls, THREE_PASS=three, _slab_pairs=pairs))

@@ -159,7 +159,7 @@ def fused_partners(i, npart, buf, n_dest, dim, walls, pos, vel, rho, m, kid, gv0
     rho_i, m_i = rho[i], m[i]
     pi_r, vol_i, kh_i, gp_i = work[i, 4], work[i, 7], work[i, 6], work[i, 8]
     vi = m_i * work[i, 5]
-    # particle i's position and velocity in scalars, loaded once (as gravity above)
+    # particle i's position and velocity in scalars, loaded once
     px0, px1 = pos[i, 0], pos[i, 1]
     px2 = pos[i, 2] if dim == 3 else 0.0
     vi0, vi1 = vel[i, 0], vel[i, 1]
@@ -256,8 +256,8 @@ def gather(i, npart, buf, dim, pos, vel, rho, m, work, k, L, n_L, gat):
 @njit(cache=True, inline="always")
 def terms(npart, dim, walls, kid, k, rho_i, m_i, pi_r, vol_i, kh_i, gp_i, use_L, Li, gat, out):
     """Rows of ``out`` (O_AI...) for particle i's partners, from ``gat`` alone. ``use_L``:
-    apply the kernel gradient correction, with ``Li`` = L_i row-major (or None where i has
-    none: a source beyond L); called with a constant, so that the loop without the
+    apply the kernel gradient correction, with ``Li`` = L_i row-major (an empty array where
+    i has none: a source beyond L); called with a constant, so that the loop without the
     correction has none of its loads (and is vectorised)."""
     do_diff, diff_h, any_visc, inv_h, fscale = k[9], k[10], k[11], k[12], k[13]
     for u in range(npart):
