@@ -7,14 +7,25 @@ repository. Plugins are never selected unless a test says so (``[plugins] use = 
 from __future__ import annotations
 
 import importlib.util
+import os
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 
 from sphcore import runner
 from sphcore.simulation import Simulation
 from sphcore.testing import write_case  # noqa: F401  (the tests import it from here)
+
+# Hypothesis: CI draws the same examples on every run (derandomised, no example database),
+# and with no timing-based check (deadline, too_slow), so a submission is never failed by a
+# draw or a timing no earlier run made; a developer's run keeps
+# exploring new examples and remembers its failures. HYPOTHESIS_PROFILE picks either.
+settings.register_profile("ci", derandomize=True, database=None, print_blob=True, deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow])
+settings.register_profile("dev", print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci" if os.environ.get("CI") else "dev"))
 
 # A small valid 2D case: a 10 x 10 block of fluid (dx = 0.02 m) resting in a 1 m box.
 GOOD_CASE = """
