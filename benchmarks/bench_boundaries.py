@@ -60,7 +60,7 @@ use = {plugins}
 
 
 def reflective_importable() -> tuple[bool, str]:
-    from sphcore import pluginhost
+    from sphcore.plugin import pluginhost
 
     info = pluginhost.available().get("reflective")
     if info is None:
@@ -87,8 +87,8 @@ def write_case(n: int, plugins, case: str, h_over_dx: float = 1.3, dx: float = 0
 
 def load(case_dir: Path):
     """A Simulation of the case (no output directory); the temporary case is removed."""
-    from sphcore import runner
-    from sphcore.simulation import Simulation
+    from sphcore.run import runner
+    from sphcore.run.simulation import Simulation
 
     try:
         return Simulation(*runner.load(case_dir))
@@ -113,7 +113,7 @@ def measure_one(n: int, steps: int, plugins, case: str) -> dict:
     sim.advance()  # compile and warm caches
     # timed on the run's hook relay, which the simulation and the forces share: a hook with
     # one implementation is called there directly, not through pluggy, so pluggy's
-    # add_hookcall_monitoring would not see it (sphcore.pluginhost.HookRelay)
+    # add_hookcall_monitoring would not see it (sphcore.plugin.pluginhost.HookRelay)
     for name in ("sph_extra_sources", "sph_after_integrate"):
         setattr(sim.hooks, name, timed(name, getattr(sim.hooks, name)))
     ghosts = []

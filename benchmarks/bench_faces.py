@@ -31,8 +31,8 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from sphcore import runner
-from sphcore.simulation import Simulation
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore_plugins.reflective.collision import face_arrays, reflect
 from sphcore_plugins.reflective.corner import scratch
 

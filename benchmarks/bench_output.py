@@ -48,7 +48,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # to the file named by $SPH_BENCH_OUTPUT_TIMES.
 CHILD = """
 import json, os, sys, time
-from sphcore import cli, simulation
+from sphcore import cli
+from sphcore.run import simulation
 spent = {"output_s": 0.0, "calls": 0}
 inner = simulation.Simulation.output
 def timed(self, final=False):

@@ -1,11 +1,11 @@
-"""Two pair loops side by side in one process: another checkout's ``sphcore/equations.py``
+"""Two pair loops side by side in one process: another checkout's ``sphcore/physics/equations.py``
 (A) against this one's (B), on the same frozen state, interleaved.
 
     python benchmarks/bench_pair_ab.py OTHER_EQUATIONS_PY [CASE] [--at 0.15] [--rounds 21]
         [--set KEY=VALUE ...]
 
     git worktree add /tmp/before HEAD~1       # for example: the commit before a change
-    NUMBA_NUM_THREADS=1 python benchmarks/bench_pair_ab.py /tmp/before/sphcore/equations.py \\
+    NUMBA_NUM_THREADS=1 python benchmarks/bench_pair_ab.py /tmp/before/sphcore/physics/equations.py \\
         benchmarks/pysph_dam_break
 
 CASE (default ``benchmarks/pysph_dam_break``) runs up to ``--at`` seconds of simulated time
@@ -27,7 +27,7 @@ noise there (docs/speed.md).
 A is loaded as the module ``sphcore.equations_a``: its imports resolve to this checkout's
 modules, so the file must fit them (the same ``Fields``, grid view and parameters). Its
 numba cache lies beside that file, keyed by the file: this checkout's own file is refused
-as A (its cache would be shared with ``sphcore.equations``'s under another module name).
+as A (its cache would be shared with ``sphcore.physics.equations``'s under another module name).
 Figures are printed, never asserted.
 """
 
@@ -43,10 +43,10 @@ from pathlib import Path
 import numba
 import numpy as np
 
-import sphcore.equations as B
-from sphcore import runner
-from sphcore.overrides import parse_set
-from sphcore.simulation import Simulation
+import sphcore.physics.equations as B
+from sphcore.case.overrides import parse_set
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -61,7 +61,7 @@ def load_other(path: Path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("other", type=Path, help="the other checkout's sphcore/equations.py (A)")
+    ap.add_argument("other", type=Path, help="the other checkout's sphcore/physics/equations.py (A)")
     ap.add_argument("case", nargs="?", default=str(ROOT / "benchmarks" / "pysph_dam_break"))
     ap.add_argument("--at", type=float, default=0.15, help="simulated time to run to first (s)")
     ap.add_argument("--rounds", type=int, default=21)
@@ -69,7 +69,7 @@ def main():
                     help="override a case option, as sph run --set does")
     a = ap.parse_args()
     if not a.other.is_file():
-        sys.exit(f"{a.other}: no such file (expected another checkout's sphcore/equations.py)")
+        sys.exit(f"{a.other}: no such file (expected another checkout's sphcore/physics/equations.py)")
     if a.other.resolve() == Path(B.__file__).resolve():
         sys.exit(f"{a.other} is this checkout's own file: give a copy in another checkout (git worktree add)")
     A = load_other(a.other)

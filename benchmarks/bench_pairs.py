@@ -26,12 +26,12 @@ from pathlib import Path
 import numba
 import numpy as np
 
-import sphcore.forces
-from sphcore import runner
-from sphcore.overrides import parse_set
-from sphcore.equations import sph_rates
-from sphcore.neighbours import neighbour_pairs
-from sphcore.simulation import Simulation
+import sphcore.physics.forces
+from sphcore.case.overrides import parse_set
+from sphcore.neighbours.cellgrid import neighbour_pairs
+from sphcore.physics.equations import sph_rates
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -73,14 +73,14 @@ def staged_steps(sim, steps: int) -> tuple[float, dict]:
 
         setattr(obj, name, wrapper)
 
-    pair_loop = sphcore.forces.sph_rates
+    pair_loop = sphcore.physics.forces.sph_rates
 
     def rates(*a):
         t = time.perf_counter()
         pair_loop(*a)
         spent["pair loop (sph_rates)"] += time.perf_counter() - t
 
-    sphcore.forces.sph_rates = rates
+    sphcore.physics.forces.sph_rates = rates
     try:
         timed(sim.forces, "pair_view", "neighbour search (grid or pair list)")
         timed(sim.integrator, "after_drift", "walls (sph_after_integrate)")
@@ -92,7 +92,7 @@ def staged_steps(sim, steps: int) -> tuple[float, dict]:
             sim.advance()
         total = time.perf_counter() - t
     finally:
-        sphcore.forces.sph_rates = pair_loop
+        sphcore.physics.forces.sph_rates = pair_loop
     return total / steps, {k: v / steps for k, v in spent.items()}
 
 

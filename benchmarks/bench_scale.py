@@ -80,8 +80,8 @@ def _rss_mb() -> float:
 
 def measure_one(n: int, dim: int, plugin: str, steps: int, skin=None) -> dict:
     """In the child process: warm up on a tiny case, then time the real one."""
-    from sphcore import runner
-    from sphcore.simulation import Simulation
+    from sphcore.run import runner
+    from sphcore.run.simulation import Simulation
 
     with tempfile.TemporaryDirectory(prefix="sphscale") as tmp:
         warm, _ = runner.load(write_case(Path(tmp) / "warm", 64, dim, PLUGINS[plugin], skin=skin))

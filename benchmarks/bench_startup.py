@@ -36,7 +36,10 @@ import numba  # noqa: E402
 mark("import numba")
 from numba.core import dispatcher  # noqa: E402
 
-from sphcore import budget, runner  # noqa: E402
+from sphcore.run import (
+    budget,  # noqa: E402
+    runner,
+)
 
 mark("import sphcore")
 

@@ -16,8 +16,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from sphcore import runner
-from sphcore.simulation import Simulation
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 
 CASE = """
 [case]

@@ -23,10 +23,11 @@ import multiprocessing as mp
 import statistics
 import time
 
-import sphcore  # noqa: F401  (its OpenMP wait policy and spin count)
 import numba
 import numpy as np
 from numba import njit, prange
+
+import sphcore  # noqa: F401  (its OpenMP wait policy and spin count)
 
 
 @njit(parallel=True)

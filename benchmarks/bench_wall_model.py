@@ -22,8 +22,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_step import make_case  # noqa: E402
 
-from sphcore import runner  # noqa: E402
-from sphcore.simulation import Simulation  # noqa: E402
+from sphcore.run import runner  # noqa: E402
+from sphcore.run.simulation import Simulation  # noqa: E402
 
 VARIANTS = {
     "reflective": (["reflective"], []),

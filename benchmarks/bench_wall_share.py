@@ -16,7 +16,7 @@ import time
 import numba
 import numpy as np
 
-from sphcore.geometry import Planes
+from sphcore.geometry.planes import Planes
 from sphcore_plugins.wall_integral.share import wall_terms
 
 

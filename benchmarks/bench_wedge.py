@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from sphcore.geometry import Planes
+from sphcore.geometry.planes import Planes
 from sphcore_plugins.reflective import clearance, reflect_particles
 
 

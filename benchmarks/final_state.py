@@ -21,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 
-
 ROOT = Path(__file__).resolve().parents[1]
 EVERYTHING = ["density_diffusion.delta=0.1", "density_diffusion.hydrostatic=true", "fluid.nu=1e-6",
               "corrections.kernel_gradient=true", "viscosity.beta=0.5"]
@@ -36,8 +35,7 @@ SUITE = {
     "3d_everything": ("dam_break_3d", 0.03, ['plugins.use=["reflective","wall_integral"]', "particles.dx=0.0114",
                                               *EVERYTHING]),
     "3d_ghost_nu": ("dam_break_3d", 0.03, ['plugins.use=["ghost"]', "particles.dx=0.0114", "fluid.nu=1e-6"]),
-    "2d_cylinder_mesh": ("dam_break_cylinder_2d", 0.05, ['plugins.use=["reflective","wall_integral"]',
-                                                          "particles.dx=0.02"]),
+    "2d_cylinder_mesh": ("dam_break_cylinder_2d", 0.03, ['plugins.use=["reflective","wall_integral"]']),
     "3d_faces_obstacle": ("dam_break_obstacle_3d", 0.05, ['plugins.use=["reflective","wall_integral"]',
                                                            "particles.dx=0.04", "blocks[0].max=[3.192, 1, 0.55]"]),
     "2d_relaxed_tank": ("hydrostatic_tank", 0.05, ['plugins.use=["reflective"]', "relax.time=0.05",
@@ -54,7 +52,10 @@ def _final_state(result):
 
 
 def save_run(case, out_file, overrides=(), t_end=None) -> str:
-    from sphcore import runner
+    try:
+        from sphcore.run import runner
+    except ImportError:  # a checkout from before the subpackages (the baseline of a comparison)
+        from sphcore import runner
 
     with tempfile.TemporaryDirectory() as out:
         result = runner.run(case, output=out, overrides=overrides, t_end=t_end, quiet=True)

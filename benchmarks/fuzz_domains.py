@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sphcore.faces import Faces, box, closed_wall, polygon, polyline, signed_measure
-from sphcore.geometry import Planes
+from sphcore.geometry.faces import Faces, box, closed_wall, polygon, polyline, signed_measure
+from sphcore.geometry.planes import Planes
 
 #: relative contact allowance of the kernel (collision.TOL_REL)
 TOL_REL = 1e-9

@@ -53,8 +53,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from fuzz_domains import KINDS, admissible, make_scene  # noqa: E402  (the random domains)
 
-from sphcore import parallel  # noqa: E402
+from sphcore.jit import parallel  # noqa: E402
 from sphcore_plugins.reflective import collision  # noqa: E402
+
 
 def side(dom, pos):
     """(n,) sign of each point's side of the plate's mid-plane (0 without a plate)."""

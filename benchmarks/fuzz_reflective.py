@@ -21,9 +21,9 @@ import numpy as np
 
 from sphcore_plugins.reflective.collision import face_arrays, outside_mask, reflect
 from sphcore_plugins.reflective.corner import scratch
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the test domains
-from domains import (box, random_directions, random_polytope,  # noqa: E402
-                     random_rotation, sample_inside, wedge)
+from domains import box, random_directions, random_polytope, random_rotation, sample_inside, wedge  # noqa: E402
 
 KINDS = ("wedge5-2d", "wedge5-3d", "polytope-2d", "polytope-3d", "box-2d", "box-3d", "wedge-2d", "wedge-3d")
 

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 import sphcore
-from sphcore.api import FLUID, GHOST, hookimpl, OutputError, ScheduledWriter, SPHERE
+from sphcore.api import FLUID, GHOST, SPHERE, OutputError, ScheduledWriter, hookimpl
 
 if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
     import netCDF4

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sphcore.api import hookimpl, Option, OutputError, ScheduledWriter
+from sphcore.api import Option, OutputError, ScheduledWriter, hookimpl
 
 if TYPE_CHECKING:  # meshio is imported where a file is written: a run without VTU output
     import meshio  # (or a case that only names the table) does not pay its import time

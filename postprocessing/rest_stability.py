@@ -7,7 +7,7 @@
 Builds ``cases/hydrostatic_tank`` with plain Tait pressure (no modified pressure), its block
 cut to ``--size`` (width, depth in m; the default 20 x 20 particles keeps each row to a few
 seconds; ``--span`` makes it a 3D tank that deep across), and for every smoothing length and
-boundary linearises the rates about the hydrostatic start (:mod:`sphcore.linearised`). Keep
+boundary linearises the rates about the hydrostatic start (:mod:`sphcore.physics.linearised`). Keep
 the width and the span above 4h + 2 dx: in a narrower channel particles reach two opposite
 walls, where the wall model adds the two walls' single-wall lattice errors (an
 approximation: 0.026 g sideways 7 dx under the surface at h = 2 dx in a channel 6 dx
@@ -29,7 +29,7 @@ disturbance the exact lattice does not have (a run from the exact lattice may st
 symmetry alone).
 
 With ``--relax T [TAU]`` each tank starts from the core's relaxed start (``[relax]``,
-:mod:`sphcore.relax`: T seconds of the case's dynamics with every velocity damped as
+:mod:`sphcore.run.relax`: T seconds of the case's dynamics with every velocity damped as
 exp(-t / TAU), TAU = 0.3 s by default, from random velocities of about the ``--jitter``
 amplitude, default 1e-3 dx here); the linearisation and the run start from that state, and
 the run's displacements are measured from it. The line ``relaxed``
@@ -53,11 +53,11 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore import runner
+from sphcore.case.overrides import parse_set
+from sphcore.physics.linearised import column_at_rest
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore_plugins.gauges.hydrostatic import layer_errors, worst_layer_error
-from sphcore.linearised import column_at_rest
-from sphcore.overrides import parse_set
-from sphcore.simulation import Simulation
 
 ROOT = Path(__file__).resolve().parent.parent
 BOUNDARIES = {"wall_model": '["reflective","wall_integral"]', "ghosts": '["ghost","reflective"]',
@@ -107,7 +107,7 @@ def jittered_run(sim, amp: float, t_end: float, every: float = 0.5):
 
 
 def relaxed(sim):
-    """Print what the core's relaxation of ``sim``'s start did (``[relax]``, sphcore.relax)."""
+    """Print what the core's relaxation of ``sim``'s start did (``[relax]``, sphcore.run.relax)."""
     r = sim.ctx.stats("core")["relax"]
     print(f"      relaxed {r['time_s']:g} s (tau {r['damping_time_s']:g} s): moved {r['max_move_dx']:.3g} dx from the "
           f"lattice, speed {r['last_speed_m_s']:.2g} m/s before the stop, worst layer below the top two "

@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore import runner
-from sphcore.overrides import parse_set
-from sphcore.simulation import Simulation
+from sphcore.case.overrides import parse_set
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 
 ROOT = Path(__file__).resolve().parent.parent
 BOUNDARIES = {"wall model": '["reflective","wall_integral"]', "ghosts": '["ghost","reflective"]'}

@@ -5,7 +5,7 @@
                                               [--run-set KEY=VALUE ...]
 
 Relaxes the case (plain Tait pressure, ``kernel.h_over_dx = H``) with ``reflective`` and the
-boundary plugin ``--relax-with`` (:mod:`sphcore.relax`, ``--relax`` seconds), then starts a
+boundary plugin ``--relax-with`` (:mod:`sphcore.run.relax`, ``--relax`` seconds), then starts a
 second run of the same case with ``reflective`` and ``--run-with`` from those positions and
 densities, at rest, and runs it for ``--time`` seconds, with the overrides ``--run-set`` (each
 like ``sph run --set``; for the second run only, e.g. a density diffusion the relaxation did
@@ -30,10 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore import runner
+from sphcore.case.overrides import parse_set
 from sphcore.errors import CaseError
-from sphcore.overrides import parse_set
-from sphcore.simulation import Simulation
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore_plugins.gauges.hydrostatic import layer_errors
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -19,7 +19,7 @@ import math
 import tempfile
 from pathlib import Path
 
-from sphcore import runner
+from sphcore.run import runner
 
 ROOT = Path(__file__).resolve().parent.parent
 BOUNDARIES = {"reflective": ["reflective"], "ghost": ["ghost"], "ghost+reflective": ["ghost", "reflective"]}

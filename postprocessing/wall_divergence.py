@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore import runner
-from sphcore.simulation import Simulation
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore.testing import write_case
 
 BOX = """

@@ -25,7 +25,7 @@ import math
 import tempfile
 from pathlib import Path
 
-from sphcore import runner
+from sphcore.run import runner
 
 ROOT = Path(__file__).resolve().parent.parent
 VARIANTS = {

@@ -17,7 +17,7 @@ import os
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 os.environ.setdefault("GOMP_SPINCOUNT", "1000")
 
-from . import jitcache as _jitcache  # noqa: E402  (after the OpenMP settings: numba must see them)
+from sphcore.jit import cache as _jitcache  # noqa: E402  (after the OpenMP settings: numba must see them)
 
 _jitcache.refresh()  # numba's caches of edited sources, and of what was compiled into others
 

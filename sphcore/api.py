@@ -20,33 +20,33 @@
 - :class:`by_size` (a prange kernel compiled serial and parallel, run parallel only where
   it pays) and :func:`on_threads_by_size` (a kernel with one prange loop, run on one thread where
   a launch on several would cost more than the work);
-- the equation of state: :mod:`sphcore.eos` as :data:`eos`;
+- the equation of state: :mod:`sphcore.physics.eos` as :data:`eos`;
 - output: :class:`ScheduledWriter` (base of a writer plugin: schedule, restart, write errors),
   :class:`Schedule`, :func:`write_atomically` (a file replaced whole or not at all).
 
-Hook specifications: :mod:`sphcore.hookspecs`. A plugin template: ``examples/plugin_template``.
+Hook specifications: :mod:`sphcore.plugin.hookspecs`. A plugin template: ``examples/plugin_template``.
 """
 
 from __future__ import annotations
 
-from . import eos
-from .context import RunContext
-from .equations import Fields, WallTerms
-from .errors import CaseError, Instability, OutputError
-from .facegeom import face_distance, first_contact, nearest_point
-from .facegrid import FaceGrid, box_cells, build_grid, cell_span
-from .faces import Faces
-from .geometry import Planes, particle_distance, plane_distance
-from .hookspecs import hookimpl
-from .kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
-from .neighbours import CellGrid, Grid, cell_of, cell_range
-from .options import Option, validate_table
-from .outdir import write_atomically
-from .parallel import by_size, on_threads_by_size
-from .params import Params
-from .particles import FLUID, GHOST, SPHERE, ParticleState, Sources
-from .schedule import Schedule, schedule_options
-from .writer import ScheduledWriter
+from sphcore.case.options import Option, validate_table
+from sphcore.errors import CaseError, Instability, OutputError
+from sphcore.geometry.facegeom import face_distance, first_contact, nearest_point
+from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
+from sphcore.geometry.faces import Faces
+from sphcore.geometry.planes import Planes, particle_distance, plane_distance
+from sphcore.io.outdir import write_atomically
+from sphcore.io.schedule import Schedule, schedule_options
+from sphcore.io.writer import ScheduledWriter
+from sphcore.jit.parallel import by_size, on_threads_by_size
+from sphcore.neighbours.cellgrid import CellGrid, Grid, cell_of, cell_range
+from sphcore.physics import eos
+from sphcore.physics.equations import Fields, WallTerms
+from sphcore.physics.kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
+from sphcore.physics.params import Params
+from sphcore.physics.particles import FLUID, GHOST, SPHERE, ParticleState, Sources
+from sphcore.plugin.context import RunContext
+from sphcore.plugin.hookspecs import hookimpl
 
 __all__ = [
     "hookimpl", "Option", "CaseError", "Instability", "OutputError",

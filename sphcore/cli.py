@@ -11,8 +11,8 @@ import argparse
 import signal
 import sys
 
-from . import __version__
-from .errors import CaseError, OutputError
+from sphcore import __version__
+from sphcore.errors import CaseError, OutputError
 
 
 def _parser():
@@ -74,10 +74,11 @@ def _fail(msg, status):
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "sweep":
-        from .sweep import main as sweep_main
+        from sphcore.sweep import main as sweep_main
 
         return sweep_main(args)
-    from . import pluginhost, runner
+    from sphcore.plugin import pluginhost
+    from sphcore.run import runner
 
     try:
         if args.command == "plugins":
@@ -90,7 +91,7 @@ def main(argv=None) -> int:
         if args.command == "check":
             # the same validation as `sph run` (case, memory estimate, output path, first
             # step), so that whatever check accepts, run starts
-            from . import budget
+            from sphcore.run import budget
 
             case, pm = runner.load(args.case_dir, args.overrides, args.t_end)
             out = runner.output_path(case, args.output)
@@ -132,8 +133,9 @@ def main(argv=None) -> int:
 
 def _options(only=None) -> int:
     """Print every case key: the core's tables and each usable plugin's."""
-    from . import defaults, pluginhost
-    from .options import Option
+    from sphcore.case import defaults
+    from sphcore.case.options import Option
+    from sphcore.plugin import pluginhost
 
     tables = {("core", k): v for k, v in defaults.CORE.items()}
     tables.update({("core", "blocks[]"): defaults.BLOCK, ("core", "domain.planes[]"): defaults.PLANE,

@@ -5,7 +5,7 @@
     summary = run_case(tmp_path, TINY_CASE, plugins=["myplugin"], tables={"myplugin": {"k": 1}})
     assert summary["myplugin"]["figure"] == ...
 
-``context`` builds a real :class:`sphcore.context.RunContext` of a case for calling one
+``context`` builds a real :class:`sphcore.plugin.context.RunContext` of a case for calling one
 hook directly (no run), so plugin unit tests need no stand-in objects.
 """
 
@@ -20,11 +20,12 @@ try:
 except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
-from . import pluginhost, runner
-from .case import validate
-from .context import RunContext
-from .params import derive
-from .simulation import build_state
+from sphcore.case.model import validate
+from sphcore.physics.params import derive
+from sphcore.plugin import pluginhost
+from sphcore.plugin.context import RunContext
+from sphcore.run import runner
+from sphcore.run.simulation import build_state
 
 #: a valid 2D case: a 10 x 10 block of water (dx = 0.02 m) resting on the floor of a 1 m box
 TINY_CASE = """

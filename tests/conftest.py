@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
 
-from sphcore import runner
-from sphcore.simulation import Simulation
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore.testing import write_case  # noqa: F401  (the tests import it from here)
 
 # Hypothesis: CI draws the same examples on every run (derandomised, no example database),

@@ -1,6 +1,6 @@
 """Bounded convex wall domains and admissible start points, for tests and the fuzz benchmark.
 
-A :class:`Domain` is a :class:`sphcore.geometry.Planes` with a ``centre`` whose signed
+A :class:`Domain` is a :class:`sphcore.geometry.planes.Planes` with a ``centre`` whose signed
 distance to every plane is at least ``inradius`` (m): the region {d >= r} a particle
 centre of radius r < inradius may occupy is then non-empty and contains ``centre``.
 """
@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sphcore.geometry import Planes, recession_direction
+from sphcore.geometry.planes import Planes, recession_direction
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from sphcore import api, cli, context, hookspecs
-from sphcore.testing import TINY_CASE, context as make_context, write_case
+from sphcore import api, cli
+from sphcore.plugin import context, hookspecs
+from sphcore.testing import TINY_CASE, write_case
+from sphcore.testing import context as make_context
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -116,7 +118,7 @@ def test_options_of_a_plugin_without_options_says_so(capsys, monkeypatch):
     """`sph options counter` (an installed plugin with no table: every built-in one now has
     options, so a stand-in is installed here) answers, exit 0; an unknown name is refused
     with exit 2 and the known names, plugins without options included."""
-    from sphcore import pluginhost
+    from sphcore.plugin import pluginhost
 
     class Counter:
         @api.hookimpl

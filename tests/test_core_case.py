@@ -14,9 +14,10 @@ from pathlib import Path
 import pytest
 from conftest import GOOD_CASE, make_sim, write_case
 
-from sphcore import cli, runner
+from sphcore import cli
 from sphcore.errors import CaseError
-from sphcore.kernels import CUBIC_SPLINE
+from sphcore.physics.kernels import CUBIC_SPLINE
+from sphcore.run import runner
 
 DOMAIN_BOX = "[domain]\nmin = [0.0, 0.0]\nmax = [1.0, 1.0]\n"
 

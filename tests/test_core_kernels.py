@@ -15,7 +15,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from numba import njit
 
-from sphcore.kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
+from sphcore.physics.kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
 
 KERNELS = [pytest.param(CUBIC_SPLINE, id="cubic_spline"), pytest.param(WENDLAND_C2, id="wendland_c2")]
 DIMS = [2, 3]

@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sphcore.neighbours import CellGrid, candidates_bound, forward_pairs, forward_rows, neighbour_pairs
+from sphcore.neighbours.cellgrid import CellGrid, candidates_bound, forward_pairs, forward_rows, neighbour_pairs
 
 CELL_SIZES = [0.1, 0.25, 0.3, 1.0, 0.013]
 MAX_CELLS = 7  # per axis of the drawn point sets

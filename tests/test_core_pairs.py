@@ -1,6 +1,6 @@
 """The pair loop (each pair once, applied to both particles) against a brute-force gather
 of the same equations, written independently here from the module docstring of
-:mod:`sphcore.equations`; and its result independent of the number of threads.
+:mod:`sphcore.physics.equations`; and its result independent of the number of threads.
 
 Every term is on: artificial viscosity, laminar viscosity, density diffusion with the
 hydrostatic correction, the Bonet & Lok gradient correction, ghost sources (which act
@@ -16,11 +16,11 @@ import pytest
 from conftest import make_sim, write_case
 from core_cases import BLOB
 
-from sphcore.corrections import neighbour_sums
-from sphcore.equations import PAIRS_PARALLEL_MIN, WORK_COLUMNS, Fields, WallTerms, sph_rates
-from sphcore.wall_completion import _complete_at_wall
-from sphcore.kernels import kernel_f, kernel_w
-from sphcore.neighbours import CellGrid
+from sphcore.neighbours.cellgrid import CellGrid
+from sphcore.physics.corrections import neighbour_sums
+from sphcore.physics.equations import PAIRS_PARALLEL_MIN, WORK_COLUMNS, Fields, WallTerms, sph_rates
+from sphcore.physics.kernels import kernel_f, kernel_w
+from sphcore.physics.wall_completion import _complete_at_wall
 
 
 def _setup(tmp_path, dim, seed, kernel_gradient, walls, side=None):
@@ -184,8 +184,8 @@ def test_result_does_not_depend_on_the_thread_count(tmp_path, dim):
 def test_three_passes_give_the_fused_loops_bits_in_3d(tmp_path, kernel_gradient):
     """The 3D pair loop walks a particle's partners in three passes (gather, vectorised
     terms, scatter in the partners' order); the fused walk of 2D, built here for 3D, must
-    give the same bits, every term on, wall sums included (sphcore.pairterms)."""
-    from sphcore.equations import _RATES, _build
+    give the same bits, every term on, wall sums included (sphcore.physics.pairterms)."""
+    from sphcore.physics.equations import _RATES, _build
 
     fused = _build(3, True, three_pass=False)
     for rates, three in ((_RATES[3, True], True), (fused, False)):  # the two walks, not one twice

@@ -12,7 +12,7 @@ import pytest
 from conftest import by_id, make_sim, run_to_end, write_case
 from core_cases import BLOB, COLLIDING, SPH_KERNELS, spheres
 
-from sphcore import runner
+from sphcore.run import runner
 
 # ----------------------------------------------------------------------------------------
 # only what the scene requires

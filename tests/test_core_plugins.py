@@ -17,9 +17,11 @@ import numpy as np
 import pytest
 from conftest import by_id, make_sim, write_case
 
-from sphcore import cli, pluginhost, runner
+from sphcore import cli
 from sphcore.errors import CaseError
-from sphcore.pluginhost import PluginLoadError
+from sphcore.plugin import pluginhost
+from sphcore.plugin.pluginhost import PluginLoadError
+from sphcore.run import runner
 
 GOOD_PLUGIN = '''
 """A throwaway sphcore plugin, written by the test suite."""
@@ -338,7 +340,7 @@ def test_a_run_imports_only_the_plugins_its_case_may_need(tmp_path):
     import subprocess
 
     case_dir = write_case(tmp_path / "c", plugins=["reflective"], tables={"vtu": {"every_dt": 0.1}})
-    code = ("import sys; from sphcore import runner; runner.load(sys.argv[1]); "
+    code = ("import sys; from sphcore.run import runner; runner.load(sys.argv[1]); "
             "print(' '.join(sorted(m for m in sys.modules if m.startswith('sphcore_plugins.') and m.count('.') == 1)))")
     out = subprocess.run([sys.executable, "-c", code, str(case_dir)], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["sphcore_plugins.reflective", "sphcore_plugins.vtu"]

@@ -13,7 +13,8 @@ import pytest
 from conftest import by_id, make_sim, run_to_end, write_case
 from core_cases import BLOB, COLLIDING, SPHERES
 
-from sphcore import cli, runner
+from sphcore import cli
+from sphcore.run import runner
 
 # ----------------------------------------------------------------------------------------
 # instability
@@ -68,7 +69,7 @@ def test_particle_leaving_the_domain_is_caught(tmp_path):
 def test_a_particle_far_from_the_rest_is_no_instability(tmp_path):
     """Water that spreads is not unstable: a particle 5 m from the rest (a dense grid over
     the box would hold ~9000 cells) costs one cell of the sorted-key grid, and the run goes on."""
-    from sphcore.neighbours import CellGrid
+    from sphcore.neighbours.cellgrid import CellGrid
 
     sim = make_sim(write_case(tmp_path / "blob", BLOB))
     sim.state.pos[0] = [4.9, 4.9]

@@ -8,7 +8,6 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import make_sim, script, write_case
 
 G = 9.81

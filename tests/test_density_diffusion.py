@@ -18,8 +18,8 @@ import numpy as np
 from conftest import make_sim, write_case
 from core_cases import BLOB
 
-from sphcore.equations import WORK_COLUMNS, Fields, WallTerms, sph_rates
-from sphcore.neighbours import CellGrid
+from sphcore.neighbours.cellgrid import CellGrid
+from sphcore.physics.equations import WORK_COLUMNS, Fields, WallTerms, sph_rates
 
 
 def _column_rates(tmp_path, dim, k_of_rho=None):
@@ -53,7 +53,7 @@ def _column_rates(tmp_path, dim, k_of_rho=None):
         sph_rates(n, src, cells.view, prm, np.zeros((1, 3, 3)), wall, acc, drho, np.zeros((n, WORK_COLUMNS)),
                   np.zeros((n, dim)), 1)
         return drho[interior], rho, c0
-    from sphcore.kernels import kernel_f
+    from sphcore.physics.kernels import kernel_f
     drho = []
     for i in np.flatnonzero(interior):
         x = pos[i] - pos

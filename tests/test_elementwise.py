@@ -1,5 +1,5 @@
 """The per-step element-wise kernels (integrator updates, largest norms, the instability
-scan) are compiled serial and parallel (sphcore.parallel.by_size): both builds must give
+scan) are compiled serial and parallel (sphcore.jit.parallel.by_size): both builds must give
 the serial loop's answer exactly, whatever the thread count."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sphcore import checks, integrators, timestep
+from sphcore.physics import checks, integrators, timestep
 
 BUILDS = ("serial", "parallel")
 
@@ -108,7 +108,7 @@ def test_integrator_updates_give_the_same_bits_in_both_builds():
 def test_the_cell_grids_bounding_box_is_numpys_in_both_builds(n, dim, seed, nan_at):
     """Lower and upper corners of the particles in both builds of the grid's box (16 ranges
     merged); a NaN coordinate makes the lower corner NaN on that axis."""
-    from sphcore import cellkeys
+    from sphcore.neighbours import cellkeys
 
     pos = np.random.default_rng(seed).normal(size=(n, dim))
     if 0 <= nan_at < n:
@@ -127,7 +127,7 @@ def test_the_cell_grids_bounding_box_is_numpys_in_both_builds(n, dim, seed, nan_
 
 
 def test_the_equation_of_state_gives_the_same_bits_in_both_builds():
-    from sphcore import eos
+    from sphcore.physics import eos
 
     rho = np.random.default_rng(3).uniform(950.0, 1050.0, 30_000)
     p_serial, p_parallel = np.empty_like(rho), np.empty_like(rho)

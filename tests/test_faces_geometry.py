@@ -1,4 +1,4 @@
-"""The geometry object of finite walls (``sphcore.faces.Faces``): signed distance, nearest
+"""The geometry object of finite walls (``sphcore.geometry.faces.Faces``): signed distance, nearest
 point and normal against the closed form of a box (turned by a random rotation), for an
 obstacle and for a tank, in 2D and 3D (hypothesis)."""
 
@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sphcore.faces import Faces, box, closed_wall, polyline
+from sphcore.geometry.faces import Faces, box, closed_wall, polyline
 
 
 def _rotation(dim, angles):

@@ -23,7 +23,8 @@ import numpy as np
 import pytest
 from conftest import by_id, make_sim, write_case
 
-from sphcore import pluginhost, runner
+from sphcore.plugin import pluginhost
+from sphcore.run import runner
 
 DX, NX, NY = 0.01, 20, 20
 W, H = NX * DX, NY * DX  # tank width, water depth (m)

@@ -11,12 +11,19 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from sphcore.eos import fill_pressure as tait_pressure
-from sphcore.geometry import Planes
-from sphcore.particles import FLUID, SPHERE
+from sphcore.geometry.planes import Planes
+from sphcore.physics.eos import fill_pressure as tait_pressure
+from sphcore.physics.particles import FLUID, SPHERE
 from sphcore_plugins.ghost.mirror import (
-    TAIT_BASE_MIN, MirrorImages, count_images, count_images_serial, exclusive_scan, fill_images,
-    fill_images_serial, inverse_tait)
+    TAIT_BASE_MIN,
+    MirrorImages,
+    count_images,
+    count_images_serial,
+    exclusive_scan,
+    fill_images,
+    fill_images_serial,
+    inverse_tait,
+)
 
 H = 0.013  # smoothing length (m); support 2h
 SUPPORT = 2 * H

@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 from conftest import by_id, make_sim, write_case
 
-from sphcore import pluginhost, runner
 from sphcore.errors import CaseError
-from sphcore.kernels import SUPPORT
+from sphcore.physics.kernels import SUPPORT
+from sphcore.plugin import pluginhost
+from sphcore.run import runner
 from sphcore_plugins.ghost import GhostPlugin
 
 BOX = """

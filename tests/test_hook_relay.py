@@ -1,4 +1,4 @@
-"""The time loop's hook relay (sphcore.pluginhost.HookRelay) returns what pluggy returns:
+"""The time loop's hook relay (sphcore.plugin.pluginhost.HookRelay) returns what pluggy returns:
 no implementation, one (called directly), several, a wrapper, a first-result hook."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import pluggy
 import pytest
 
-from sphcore.pluginhost import HookRelay
+from sphcore.plugin.pluginhost import HookRelay
 
 spec = pluggy.HookspecMarker("relaytest")
 impl = pluggy.HookimplMarker("relaytest")

@@ -15,8 +15,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sphcore import eos, runner
-from sphcore.simulation import Simulation
+from sphcore.physics import eos
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore.testing import write_case
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from sphcore import jitcache
+from sphcore.jit import cache as jitcache
 
 
 def _tree(tmp_path):

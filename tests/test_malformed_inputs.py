@@ -28,7 +28,9 @@ from conftest import GOOD_CASE, write_case
 from core_cases import spheres
 from test_run_lifecycle import snapshot, sph
 
-from sphcore import cli, defaults, pluginhost
+from sphcore import cli
+from sphcore.case import defaults
+from sphcore.plugin import pluginhost
 
 # ----------------------------------------------------------------------------------------
 # helpers
@@ -275,7 +277,7 @@ def test_ctrl_c_during_set_up_is_one_line_and_writes_nothing(tmp_path, capsys, m
     def interrupted(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("sphcore.simulation.Simulation", interrupted)
+    monkeypatch.setattr("sphcore.run.simulation.Simulation", interrupted)
     before = snapshot(tmp_path)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "off")
     assert status == 128 + signal.SIGINT
@@ -285,10 +287,10 @@ def test_ctrl_c_during_set_up_is_one_line_and_writes_nothing(tmp_path, capsys, m
 
 def test_first_run_says_it_compiles(tmp_path, capsys, monkeypatch):
     case_dir = write_case(tmp_path / "case", GOOD_CASE)
-    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda dim=2: False)
+    monkeypatch.setattr("sphcore.run.runner.kernels_cached", lambda dim=2: False)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log")
     assert status == 0 and "[sph] compiling kernels, once" in err
-    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda dim=2: True)
+    monkeypatch.setattr("sphcore.run.runner.kernels_cached", lambda dim=2: True)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log", "--output", tmp_path / "again")
     assert status == 0 and "compiling" not in err
 
@@ -296,10 +298,10 @@ def test_first_run_says_it_compiles(tmp_path, capsys, monkeypatch):
 def test_the_cache_is_checked_before_the_first_force_evaluation_compiles(tmp_path, capsys, monkeypatch):
     """Sizing the first step evaluates the forces, which compiles (and caches) the kernels
     on a fresh machine: asked after that, the cache would always hold them."""
-    from sphcore import forces
+    from sphcore.physics import forces
 
     events = []
-    monkeypatch.setattr("sphcore.runner.kernels_cached", lambda dim=2: events.append("checked") or False)
+    monkeypatch.setattr("sphcore.run.runner.kernels_cached", lambda dim=2: events.append("checked") or False)
     evaluate = forces.Forces.evaluate
     monkeypatch.setattr(forces.Forces, "evaluate", lambda self, *a, **k: events.append("forces") or evaluate(self, *a, **k))
     case_dir = write_case(tmp_path / "case", GOOD_CASE)
@@ -309,7 +311,7 @@ def test_the_cache_is_checked_before_the_first_force_evaluation_compiles(tmp_pat
 
 
 def test_kernels_cached_finds_the_cache():
-    from sphcore import runner
+    from sphcore.run import runner
 
     assert runner.kernels_cached(2)  # the runs above compiled, and numba cached, the 2D force kernel
 
@@ -330,7 +332,7 @@ def test_eta_starts_after_the_first_step():
     import re
     from types import SimpleNamespace
 
-    from sphcore.progress import Progress
+    from sphcore.run.progress import Progress
 
     stream = io.StringIO()
     bar = Progress(t_end=1.0, n=10, mode="log", interval_s=0.0, stream=stream)

@@ -11,8 +11,8 @@ import pytest
 meshio = pytest.importorskip("meshio")
 
 from sphcore.errors import CaseError  # noqa: E402
-from sphcore.faces import signed_measure  # noqa: E402
-from sphcore.meshfile import check_closed, read_wall_mesh  # noqa: E402
+from sphcore.geometry.faces import signed_measure  # noqa: E402
+from sphcore.geometry.meshfile import check_closed, read_wall_mesh  # noqa: E402
 
 KEY = "walls[0].mesh"
 

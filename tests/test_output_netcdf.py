@@ -13,7 +13,7 @@ import xarray as xr
 from conftest import write_cut_netcdf
 
 from sphcore.errors import CaseError, OutputError
-from sphcore.particles import FLUID, SPHERE, lattice, make_block
+from sphcore.physics.particles import FLUID, SPHERE, lattice, make_block
 from sphcore_plugins.netcdf import NetcdfWriter, case_attributes
 
 CONFIG = {
@@ -192,7 +192,7 @@ def test_restart_drops_later_frames_and_appends(tmp_path, output_at_restart_step
     sim, rng = make_sim(tmp_path, every_steps=2)
     first = run(sim, rng, configured(sim), steps=9)  # steps 0, 2, 4, 6, 8, 9 (final)
     assert [f["step"] for f in first] == [0, 2, 4, 6, 8, 9]
-    # as sphcore.runner does it: the restarted Simulation fires sph_setup at t = 0, step 0,
+    # as sphcore.run.runner does it: the restarted Simulation fires sph_setup at t = 0, step 0,
     # then loads the checkpoint (here: step 4; frames 6, 8, 9 are an abandoned future)
     sim.step, sim.t, sim.restarting = 0, 0.0, True
     w = configured(sim)
@@ -244,7 +244,7 @@ def test_killed_run_keeps_synced_frames(tmp_path):
         import os, signal, sys
         from pathlib import Path
         from types import SimpleNamespace
-        from sphcore.particles import lattice, make_block
+        from sphcore.physics.particles import lattice, make_block
         from sphcore_plugins.netcdf import NetcdfWriter
         st = make_block(lattice([0, 0], [1, 1], 0.1), [0.0, 0.0], 1000.0, 0.1, 0.05, 0)
         case = SimpleNamespace(name="x", dim=2, file="case.toml", config={})
@@ -288,7 +288,7 @@ def test_disk_full_keeps_earlier_frames_readable(tmp_path):
         from pathlib import Path
         from types import SimpleNamespace
         from sphcore.errors import OutputError
-        from sphcore.particles import lattice, make_block
+        from sphcore.physics.particles import lattice, make_block
         from sphcore_plugins.netcdf import NetcdfWriter
         st = make_block(lattice([0, 0], [1, 1], 0.05), [0.0, 0.0], 1000.0, 0.05, 0.025, 0)
         case = SimpleNamespace(name="x", dim=2, file="case.toml", config={})

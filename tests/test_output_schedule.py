@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import pytest
 
 from sphcore.errors import CaseError
-from sphcore.schedule import DEFAULT_EVERY_DT, Schedule, schedule_options
+from sphcore.io.schedule import DEFAULT_EVERY_DT, Schedule, schedule_options
 
 
 def fired(schedule, times, final_at_end=True):

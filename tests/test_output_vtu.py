@@ -11,7 +11,7 @@ import pytest
 import pyvista as pv
 
 from sphcore.errors import CaseError, OutputError
-from sphcore.particles import FLUID, SPHERE, lattice, make_block
+from sphcore.physics.particles import FLUID, SPHERE, lattice, make_block
 from sphcore_plugins.vtu import VtuWriter
 
 CASE_NAME = "dam break"  # a space: the file name must be sanitised
@@ -150,7 +150,7 @@ def test_restart_drops_later_frames_and_continues(tmp_path, output_at_restart_st
     sim, rng = make_sim(tmp_path, every_steps=2)
     run(sim, rng, configured(sim), steps=9)  # frames at steps 0, 2, 4, 6, 8, 9 (final)
     t4 = read_all(sim.output_dir / PVD)[0][2]
-    # as sphcore.runner does it: the restarted Simulation fires sph_setup at t = 0, step 0,
+    # as sphcore.run.runner does it: the restarted Simulation fires sph_setup at t = 0, step 0,
     # then loads the checkpoint (here: step 4; frames 6, 8, 9 are an abandoned future)
     sim.step, sim.t, sim.restarting = 0, 0.0, True
     pvd_before = (sim.output_dir / PVD).read_text()
@@ -195,7 +195,7 @@ CHILD = textwrap.dedent("""
     from types import SimpleNamespace
     import numpy as np
     from sphcore.errors import OutputError
-    from sphcore.particles import lattice, make_block
+    from sphcore.physics.particles import lattice, make_block
     from sphcore_plugins.vtu import VtuWriter
     case = SimpleNamespace(name="x", dim=2, file="case.toml", config={})
     sim = SimpleNamespace(state=None, t=0.0, step=0, case=case, output_dir=Path(sys.argv[1]), stats={}, restarting=False)
@@ -240,7 +240,7 @@ def test_writers_register_as_sphcore_plugins():
 
     import pluggy
 
-    from sphcore import hookspecs
+    from sphcore.plugin import hookspecs
 
     eps = {ep.name: ep for ep in entry_points(group="sphcore")}
     pm = pluggy.PluginManager(hookspecs.PROJECT)

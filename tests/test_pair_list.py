@@ -1,4 +1,4 @@
-"""Kept pair lists (:mod:`sphcore.pairlist`): the pair loop over a list built up to half a
+"""Kept pair lists (:mod:`sphcore.neighbours.pairlist`): the pair loop over a list built up to half a
 skin ago gives the rates of a fresh cell walk (to round-off: only the order of a particle's
 additions may differ), every pair within 2h is listed while no particle has moved more than
 half the skin, the list follows a reorder into its own cell order unchanged, and a run
@@ -14,10 +14,10 @@ from core_cases import COLLIDING
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sphcore import runner
-from sphcore.equations import WORK_COLUMNS, Fields, WallTerms, sph_rates
-from sphcore.neighbours import CellGrid, neighbour_pairs
-from sphcore.pairlist import PairList
+from sphcore.neighbours.cellgrid import CellGrid, neighbour_pairs
+from sphcore.neighbours.pairlist import PairList
+from sphcore.physics.equations import WORK_COLUMNS, Fields, WallTerms, sph_rates
+from sphcore.run import runner
 
 
 def _cloud(dim, side, seed, dx=0.02):

@@ -1,4 +1,4 @@
-"""One prange loop serves small and large calls (sphcore.parallel.on_threads_by_size): the
+"""One prange loop serves small and large calls (sphcore.jit.parallel.on_threads_by_size): the
 kernel runs on one thread below the size, on the count set above it, and the count set is
 restored; the wall model's plane terms, run that way, give the same bits on one thread and
 two."""
@@ -8,10 +8,9 @@ from __future__ import annotations
 import numba
 import numpy as np
 import pytest
-
-from sphcore.parallel import on_threads_by_size
-
 from conftest import make_sim, write_case
+
+from sphcore.jit.parallel import on_threads_by_size
 
 TANK = """
 [case]

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sphcore import pluginhost
+from sphcore.plugin import pluginhost
 from sphcore.testing import run_case
 
 TEMPLATE = Path(__file__).resolve().parents[1] / "examples" / "plugin_template"

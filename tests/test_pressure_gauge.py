@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sphcore import eos
+from sphcore.physics import eos
 from sphcore.testing import run_case
 
 TANK = """
@@ -33,7 +33,7 @@ use = ["reflective", "pressure_gauge"]
 @pytest.mark.parametrize("radius", ["", "radius = 0.003", "radius = 0.005"])
 def test_gauge_reads_the_initial_hydrostatic_tank_as_exact(tmp_path, radius):
     """At t = 0 the particles carry the exact hydrostatic pressure of the Tait fluid
-    (sphcore.eos.hydrostatic_pressure): the gauge, which compares with the incompressible
+    (sphcore.physics.eos.hydrostatic_pressure): the gauge, which compares with the incompressible
     rho0 g (H - y), reads the compressibility's excess p(d) / (rho0 g d) - 1 at the deepest
     layer (d = H - dx/2; 0.24 % in this 0.2 m tank at c0 = 10 sqrt(2 g H)), to round-off,
     and nothing has moved, for any contact radius."""

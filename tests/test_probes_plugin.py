@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from conftest import make_sim, script, write_case, write_cut_netcdf
 
-from sphcore import cli, runner
+from sphcore import cli
 from sphcore.errors import CaseError
+from sphcore.run import runner
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -10,8 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from sphcore.kernels import KERNEL_IDS
-from sphcore.particles import lattice
+from sphcore.physics.kernels import KERNEL_IDS
+from sphcore.physics.particles import lattice
 from sphcore_plugins.probes import figures
 from sphcore_plugins.probes.sampling import depth_above, interpolate_pressure, line_points, select_near
 

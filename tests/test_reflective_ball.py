@@ -9,7 +9,7 @@ is the wall's doing.
 import numpy as np
 import pytest
 
-from sphcore.geometry import Planes
+from sphcore.geometry.planes import Planes
 from sphcore_plugins.reflective.collision import reflect_particles
 
 G = 9.81

@@ -23,9 +23,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sphcore.facegeom import face_distance
-from sphcore.faces import Faces, box, closed_wall, polygon, polyline
-from sphcore.geometry import Planes
+from sphcore.geometry.facegeom import face_distance
+from sphcore.geometry.faces import Faces, box, closed_wall, polygon, polyline
+from sphcore.geometry.planes import Planes
 from sphcore_plugins.reflective.collision import reflect_particles
 
 

@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
-
-from sphcore.geometry import Planes
-from sphcore.particles import lattice
-from sphcore_plugins.reflective.collision import TOL_REL, clearance, outside, reflect_particles
 from domains import box, random_directions, random_rotation, sample_inside, wedge
+
+from sphcore.geometry.planes import Planes
+from sphcore.physics.particles import lattice
+from sphcore_plugins.reflective.collision import TOL_REL, clearance, outside, reflect_particles
 
 
 def run(pos0, pos, vel, planes, r, cr, acc=None, **kw):

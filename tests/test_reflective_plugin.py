@@ -7,12 +7,12 @@ import numpy as np
 import pluggy
 import pytest
 
-from sphcore import hookspecs
-from sphcore.context import RunContext
+from sphcore.case.options import validate_table
 from sphcore.errors import CaseError
-from sphcore.geometry import Planes
-from sphcore.options import validate_table
-from sphcore.particles import FLUID, lattice, make_block
+from sphcore.geometry.planes import Planes
+from sphcore.physics.particles import FLUID, lattice, make_block
+from sphcore.plugin import hookspecs
+from sphcore.plugin.context import RunContext
 from sphcore_plugins.reflective import ReflectivePlugin
 from sphcore_plugins.reflective.collision import outside
 

@@ -6,12 +6,11 @@ displacements up to 100 domain lengths in one step; CR in [0, 1].
 """
 
 import numpy as np
+from domains import box, random_directions, random_polytope, random_rotation, sample_inside, wedge
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sphcore_plugins.reflective.collision import outside, reflect_particles
-from domains import (box, random_directions, random_polytope,
-                                                random_rotation, sample_inside, wedge)
 
 SETTINGS = settings(max_examples=150, deadline=None)
 M = 300  # particles per example

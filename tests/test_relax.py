@@ -1,4 +1,4 @@
-"""The relaxed start (``[relax]``, :mod:`sphcore.relax`): dynamic relaxation before t = 0.
+"""The relaxed start (``[relax]``, :mod:`sphcore.run.relax`): dynamic relaxation before t = 0.
 
 Known answers: under plain Tait pressure the square lattice of a tank at rest is an unstable
 equilibrium at h = 1.5 dx (``tests/test_rest_linearised.py``), so a run from it slides; the
@@ -14,11 +14,12 @@ import json
 
 import numpy as np
 import pytest
-
-from sphcore import cli, relax, runner
-from sphcore.simulation import Simulation
-from sphcore.testing import write_case
 from conftest import script
+
+from sphcore import cli
+from sphcore.run import relax, runner
+from sphcore.run.simulation import Simulation
+from sphcore.testing import write_case
 
 # cases/hydrostatic_tank cut to 20 x 20 particles, plain Tait pressure, h = 1.5 dx
 TANK = """

@@ -1,4 +1,4 @@
-"""A tank of water at rest, linearised (sphcore.linearised): the waves it must carry, and
+"""A tank of water at rest, linearised (sphcore.physics.linearised): the waves it must carry, and
 whether its rest state is stable.
 
 Plain Tait pressure, hydrostatic start, a 20 x 20 block (0.4 m x 0.4 m, dx = 0.02 m); the
@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sphcore import runner
-from sphcore.linearised import blocks, column_at_rest, rate_jacobian, state_rates, state_vector
-from sphcore.overrides import parse_set
-from sphcore.simulation import Simulation
+from sphcore.case.overrides import parse_set
+from sphcore.physics.linearised import blocks, column_at_rest, rate_jacobian, state_rates, state_vector
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 
 TANK = Path(__file__).resolve().parent.parent / "cases" / "hydrostatic_tank"
 BOUNDARIES = {"ghosts": '["ghost","reflective"]', "wall model": '["reflective","wall_integral"]'}

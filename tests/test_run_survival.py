@@ -25,7 +25,8 @@ from conftest import GOOD_CASE, write_case
 from test_run_lifecycle import CASE, FRAME_FIELDS, checkpoint_by_id, netcdf_frames, snapshot, sph_command, stray_files
 
 import sphcore
-from sphcore import cli, outdir
+from sphcore import cli
+from sphcore.io import outdir
 
 
 def cli_main(capsys, *argv) -> tuple[int, str, str]:
@@ -121,7 +122,7 @@ def test_checkpoints_are_periodic(dam, tmp_path, capsys, monkeypatch):
     case_dir, ref = dam
     meta, _ = checkpoint_by_id(ref)
     assert meta["version"] == sphcore.__version__ and meta["output_dir"] == str(ref.resolve())
-    from sphcore import checkpoint
+    from sphcore.run import checkpoint
 
     saved, real = [], checkpoint.save
     monkeypatch.setattr(checkpoint, "save", lambda sim, d, extra=None: saved.append((sim.t, sim.step)) or real(sim, d, extra))
@@ -169,7 +170,7 @@ def test_restart_of_another_run_is_refused_and_appends_nothing(stopped_run, tmp_
         argv[1] = other
         needle = "case file"
     elif change == "version":
-        monkeypatch.setattr("sphcore.resume.__version__", "99.0")
+        monkeypatch.setattr("sphcore.run.resume.__version__", "99.0")
         needle = "written by sphcore 0.1.0, this is 99.0"
     else:  # the directory copied elsewhere: its checkpoint belongs to the first one
         moved = tmp_path / "copy"
@@ -363,7 +364,7 @@ def test_full_disk_at_every_write_point(dam, tmp_path, capsys, monkeypatch, poin
 
 
 def test_checkpoint_clock():
-    from sphcore.resume import CheckpointClock
+    from sphcore.run.resume import CheckpointClock
 
     clock = CheckpointClock(0, 0.1, t0=0.25)  # simulated time only, restarted at 0.25 s
     fired = [t for t in np.arange(0.26, 0.71, 0.01).round(2) if clock.due(float(t))]
@@ -378,7 +379,7 @@ def test_checkpoint_clock():
 def test_restart_ignores_tables_of_plugins_the_run_does_not_use():
     from types import SimpleNamespace
 
-    from sphcore import resume
+    from sphcore.run import resume
 
     cfg = {"time": {"t_end": 1.0}, "plugins": {"use": ["vtu"]}, "vtu": {"every_dt": 0.01}}
     meta = {"version": sphcore.__version__, "config": resume.config_json({**cfg, "newly_installed": {"a": 1}})}
@@ -393,7 +394,7 @@ def test_restart_accepts_a_change_of_a_plugin_option_declared_restart_true():
     """Option(restart=True) (vtu.compress) may change on --restart; other plugin keys may not."""
     from types import SimpleNamespace
 
-    from sphcore import resume
+    from sphcore.run import resume
 
     cfg = {"time": {"t_end": 1.0}, "plugins": {"use": ["vtu"]}, "vtu": {"every_dt": 0.01, "compress": True}}
     meta = {"version": sphcore.__version__, "config": resume.config_json(cfg)}
@@ -407,7 +408,7 @@ def test_restart_accepts_a_change_of_a_plugin_option_declared_restart_true():
 
 def test_the_vtu_writers_compress_option_may_change_on_restart(tmp_path):
     """End to end: the case's restart_keys come from the plugins' Option(restart=True)."""
-    from sphcore import runner
+    from sphcore.run import runner
 
     case_dir = write_case(tmp_path / "c", plugins=["reflective", "vtu"])
     case, _ = runner.load(case_dir)

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from conftest import script
+
 from sphcore_plugins.gauges.reference import kleefsman
 
 

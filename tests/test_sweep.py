@@ -17,8 +17,8 @@ import pytest
 from conftest import write_case
 
 from sphcore import cli
-from sphcore.sweep import command as sweep
 from sphcore.errors import CaseError
+from sphcore.sweep import command as sweep
 from sphcore.sweep.grid import expand, fold, key_text, parse_key, parse_set, parse_vary, split_values
 from sphcore.sweep.results import grid, pareto_mask
 

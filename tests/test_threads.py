@@ -1,4 +1,4 @@
-"""The thread count of a run: chosen from measured step times (sphcore.threads), and
+"""The thread count of a run: chosen from measured step times (sphcore.run.threads), and
 changing it between steps leaves every bit of the result as it was."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from conftest import by_id, write_case
 
-from sphcore import runner, threads
-from sphcore.threads import ThreadTuner, candidates
+from sphcore.run import runner, threads
+from sphcore.run.threads import ThreadTuner, candidates
 
 # a 2D dam break of 2,600 particles (above the pair loop's serial limit, PAIRS_PARALLEL_MIN
 # = 1,000: its slabs run in parallel) with the wall model, density diffusion and artificial

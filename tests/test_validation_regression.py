@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sphcore import runner
-from sphcore.simulation import Simulation
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore_plugins.gauges.front import front_position
 
 CASES = Path(__file__).resolve().parent.parent / "cases"

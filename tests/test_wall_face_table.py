@@ -149,7 +149,7 @@ def test_inside_a_solid_the_table_continues_s_smoothly():
 
 def test_the_plugin_uses_the_table_when_asked_and_says_so():
     text = SQUARE_2D + '[wall_integral]\nfaces = "table"\n'
-    from sphcore.equations import WallTerms
+    from sphcore.physics.equations import WallTerms
     from sphcore_plugins.wall_integral import WallIntegralPlugin
 
     out = {}
@@ -171,7 +171,7 @@ def test_the_plugin_uses_the_table_when_asked_and_says_so():
 
 
 def test_a_table_above_its_node_limit_falls_back_to_the_exact_terms():
-    from sphcore.equations import WallTerms
+    from sphcore.physics.equations import WallTerms
     from sphcore_plugins.wall_integral import WallIntegralPlugin
 
     ctx = context(SQUARE_2D + '[wall_integral]\nfaces = "table"\ntable_max_nodes = 100\n')

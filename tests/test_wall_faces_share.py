@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 from numba import njit
 
-from sphcore.faces import box, closed_wall, polygon
-from sphcore.geometry import Planes
-from sphcore.kernels import kernel_w
+from sphcore.geometry.faces import box, closed_wall, polygon
+from sphcore.geometry.planes import Planes
+from sphcore.physics.kernels import kernel_w
 from sphcore_plugins.wall_integral.meshfaces import face_terms_at
 from sphcore_plugins.wall_integral.share import wall_terms_at
 
@@ -91,7 +91,7 @@ def test_an_obstacle_share_is_the_integral_of_the_kernel_over_it(shape):
 def _plugin_terms(domain, calls=1):
     """The wall_integral plugin's terms on the initial lattice of a 0.5 x 0.3 block of water
     in the corner of a 1 m tank given by ``domain``, at the last of ``calls`` calls."""
-    from sphcore.equations import WallTerms
+    from sphcore.physics.equations import WallTerms
     from sphcore.testing import context
     from sphcore_plugins.wall_integral import WallIntegralPlugin
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore.testing import run_case, write_case
-from sphcore import runner
-from sphcore.simulation import Simulation
 
 BOX = """
 [case]
@@ -113,7 +113,7 @@ def test_lattice_moment_is_the_interior_sum_and_tends_to_the_continuum():
     """lambda = -(1/dim) sum_k dx^dim x_k . grad W(x_k) on the square/cubic lattice: an
     independent brute-force sum of the full tensor gives lambda I (cubic symmetry), 0.974
     for Wendland C2 at h = 1.3 dx in 2D, and lambda -> 1 as h/dx grows (the continuum)."""
-    from sphcore.kernels import WENDLAND_C2, kernel_f, lattice_moment
+    from sphcore.physics.kernels import WENDLAND_C2, kernel_f, lattice_moment
 
     for dim in (2, 3):
         dx, h = 0.02, 1.3 * 0.02
@@ -204,7 +204,7 @@ def test_a_stagnation_flow_changes_the_density_only_where_the_kernel_is_truncate
     moment sum_j V_j (x_j - x_i) (x) grad_i W_ij (an independent brute-force sum here), and
     0 to round-off where the support is whole. This is the floor layer's spurious
     compression or expansion of docs/wall_pressure.md ("The floor layer's excess")."""
-    from sphcore.kernels import WENDLAND_C2, kernel_f
+    from sphcore.physics.kernels import WENDLAND_C2, kernel_f
 
     dx, hdx, side = 0.02, 1.3, 0.3
     h = hdx * dx

@@ -20,7 +20,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from sphcore.kernels import kernel_f, kernel_w
+from sphcore.physics.kernels import kernel_f, kernel_w
 from sphcore_plugins.wall_integral.share import moment_tensor_at, wall_terms, wall_terms_at
 
 H = 1.0

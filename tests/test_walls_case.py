@@ -11,10 +11,11 @@ import meshio
 import numpy as np
 import pytest
 
-from sphcore import cli, runner
+from sphcore import cli
 from sphcore.errors import CaseError
-from sphcore.faces import box
-from sphcore.simulation import Simulation
+from sphcore.geometry.faces import box
+from sphcore.run import runner
+from sphcore.run.simulation import Simulation
 from sphcore.testing import write_case
 
 BASE = """

@@ -30,7 +30,6 @@ import math
 import numpy as np
 
 from sphcore.api import SUPPORT, CaseError, Option, hookimpl, write_atomically
-
 from sphcore_plugins.probes.sampling import depth_above, select_near
 
 from . import reference

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.api import hookimpl, Option
+from sphcore.api import Option, hookimpl
 
 
 def layer_errors(y, p, dx, H, rho0, g):

@@ -1,6 +1,6 @@
 """Mirror (ghost) particles across wall planes, as numba kernels over struct-of-arrays.
 
-Each wall is a plane n . X = offset (``sphcore.geometry.Planes``) with the unit normal n
+Each wall is a plane n . X = offset (``sphcore.geometry.planes.Planes``) with the unit normal n
 pointing into the domain; the signed distance of a point x is d = n . x - offset (m),
 positive inside. The reflection of x across plane k is R_k(x) = x - 2 d_k(x) n_k.
 
@@ -44,9 +44,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-
 from sphcore.api import FLUID, Sources, eos, plane_distance
-
 
 #: smallest base (p - p_b)/B + 1 of the inverse Tait equation: keeps rho_g real and
 #: positive (>= 0.37 rho0 for gamma = 7) under strong tension
@@ -283,7 +281,7 @@ class MirrorImages:
 
     def generate(self, pos, vel, rho, p, m, kind, support, gravity, rho0, c0, gamma, p_background=0.0,
                  rho_ref=0.0):
-        """Ghosts of the current fluid as :class:`sphcore.particles.Sources`.
+        """Ghosts of the current fluid as :class:`sphcore.physics.particles.Sources`.
 
         ``support`` is the kernel support radius 2h (m), ``gravity`` (3,) m/s^2 padded with
         zeros, ``rho0`` (kg/m^3), ``c0`` (m/s), ``gamma``, ``p_background`` (Pa): the Tait

@@ -26,7 +26,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from sphcore.api import CaseError, Option, validate_table
-
 from sphcore_plugins.gauges import reference
 
 from .sampling import line_points

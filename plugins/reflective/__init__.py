@@ -21,8 +21,7 @@ import numpy as np
 
 from sphcore.api import CaseError, Option, hookimpl
 
-from .collision import (TOL_REL, clearance, face_arrays, min_clearance, outside, outside_mask,
-                        reflect, reflect_particles)
+from .collision import TOL_REL, clearance, face_arrays, min_clearance, outside, outside_mask, reflect, reflect_particles
 from .corner import scratch
 
 __all__ = ["ReflectivePlugin", "reflect", "reflect_particles", "clearance", "min_clearance",
@@ -40,7 +39,7 @@ class ReflectivePlugin:
         self.velocity_at_contact = True
         self.normals = np.zeros((0, 0))
         self.offsets = np.zeros(0)
-        self.walls = None  # finite faces (sphcore.faces.Faces) or None
+        self.walls = None  # finite faces (sphcore.geometry.faces.Faces) or None
         self.faces = ()  # their kernel arrays, built at setup (the grid needs the radius)
         self.scratch = scratch()  # per-thread work arrays of corner contacts
         # per-particle kernel outputs, resized when the particle count changes

@@ -51,8 +51,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from sphcore.api import (box_cells, build_grid, by_size, face_distance, particle_distance,
-                         plane_distance)
+from sphcore.api import box_cells, build_grid, by_size, face_distance, particle_distance, plane_distance
 
 from .corner import MAX_ACTIVE, respond, scratch
 from .facecontact import contact_normal, earliest_face, empty_grid, near_any_face
@@ -82,8 +81,8 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gsh
     pos0, pos, vel, acc: (n, dim) C-contiguous float64: start and end positions (m),
     end-of-step velocity (m/s), the step's acceleration (m/s^2). radius (n,) m.
     normals (k, dim) unit vectors into the domain, offsets (k,) = n . X0 (m).
-    verts (nf, dim, dim): finite faces (:mod:`sphcore.faces`), with their grid
-    (glo, ginv, gshape, gstart, gitems: :meth:`sphcore.facegrid.FaceGrid.arrays`).
+    verts (nf, dim, dim): finite faces (:mod:`sphcore.geometry.faces`), with their grid
+    (glo, ginv, gshape, gstart, gitems: :meth:`sphcore.geometry.facegrid.FaceGrid.arrays`).
     ws, wi: scratch rows for corner contacts, one per block of particles (:func:`.corner.scratch`).
     cr: restitution coefficient (Eq. 2), 0 <= cr <= 1. max_reflections: int >= 0.
     velocity_at_contact: bool, Eq. 2 at the contact point (True) or at the end point.
@@ -328,7 +327,7 @@ def _inout(name, a, shape):
 
 def face_arrays(faces, dim, radius):
     """Kernel arguments (verts, glo, ginv, gshape, gstart, gitems) for ``faces`` (a
-    :class:`sphcore.faces.Faces` or None), the grid's cells CELL_RADII radii wide (m)."""
+    :class:`sphcore.geometry.faces.Faces` or None), the grid's cells CELL_RADII radii wide (m)."""
     if faces is None or faces.count == 0:
         return empty_grid(dim)
     grid = build_grid(faces.verts, CELL_RADII * float(radius))
@@ -342,8 +341,8 @@ def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflectio
 
     pos (m) and vel (m/s), (n, dim) writeable C-contiguous float64, are changed in place.
     pos0 (m) and acc (m/s^2, None for zero) are converted as needed; radius is a scalar
-    or (n,) (m); planes a :class:`sphcore.geometry.Planes` or ``(normals, offsets)``;
-    faces a :class:`sphcore.faces.Faces` (finite walls) or None.
+    or (n,) (m); planes a :class:`sphcore.geometry.planes.Planes` or ``(normals, offsets)``;
+    faces a :class:`sphcore.geometry.faces.Faces` (finite walls) or None.
     guarded_flags ((n,) int8) and reflection_counts ((n,) int32), when given, receive the
     per-particle guard flags and reflection counts.
     """

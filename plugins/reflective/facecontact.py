@@ -1,11 +1,11 @@
 """The earliest contact of a moving sphere with the finite wall faces near it.
 
 The faces (segments in 2D, triangles in 3D) come with a uniform grid
-(:mod:`sphcore.facegrid`); a sub-segment A -> B of a particle's step tests only the faces
+(:mod:`sphcore.geometry.facegrid`); a sub-segment A -> B of a particle's step tests only the faces
 listed in the cells its box, inflated by the radius, covers. A face collides when the
 path comes closer than r - tol to it anywhere (not only at B: a thin wall may be crossed
 within one step); the contact is where the distance first reaches r (paper section 2.2
-with the plane replaced by the face, :func:`sphcore.facegeom.first_contact`). The
+with the plane replaced by the face, :func:`sphcore.geometry.facegeom.first_contact`). The
 response then uses the plane tangent to the face's r-neighbourhood at the contact point:
 normal n = (C - q) / |C - q|, q the face's point nearest to the contact C. That set is
 convex, so the tangent plane separates it from everything on its fluid side: a centre
@@ -99,7 +99,7 @@ def contact_normal(verts, f, c0, c1, c2, p0, p1, p2):
 
 @njit(cache=True)
 def face_normal(verts, f):
-    """Unit normal of face f (the orientation of :mod:`sphcore.faces`)."""
+    """Unit normal of face f (the orientation of :mod:`sphcore.geometry.faces`)."""
     if verts.shape[2] == 2:
         e0, e1 = verts[f, 1, 0] - verts[f, 0, 0], verts[f, 1, 1] - verts[f, 0, 1]
         ln = math.sqrt(e0 * e0 + e1 * e1)

@@ -7,7 +7,7 @@ each particle's kernel support, computed from the wall planes (``share.py``: clo
 for planes, corners and wedges of any angle, 2D and 3D): the share s, its gradient G, the
 hydrostatic moment T g, and the projector onto the near walls' normals (``normals.py``),
 for the particles within 2h of a plane only (``planes.py``). The core completes the sums with them
-(:func:`sphcore.wall_completion._complete_at_wall`):
+(:func:`sphcore.physics.wall_completion._complete_at_wall`):
 
     drho_i/dt = sum_j m_j v_ij . grad W_ij + 2 rho_i v_i . G_w
     dv_i/dt   = g - sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad W_ij
@@ -55,7 +55,7 @@ class WallIntegralPlugin:
     def __init__(self):
         self._near = np.zeros(0, np.int64)  # indices of the particles near a plane (scratch)
         self._table = None
-        self.walls = None  # finite faces (sphcore.faces.Faces) or None
+        self.walls = None  # finite faces (sphcore.geometry.faces.Faces) or None
         self._faces = None
         self._epoch = 0
 

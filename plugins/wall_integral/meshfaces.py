@@ -1,7 +1,7 @@
 """The wall share s, its gradient G and the moment T g of finite wall faces, exact.
 
 The same boundary integrals as ``share.py`` (module doc there: Kulasegaram et al. 2004,
-Feldman & Bonet 2007, Ferrand et al. 2013), over the faces of ``sphcore.faces.Faces``
+Feldman & Bonet 2007, Ferrand et al. 2013), over the faces of ``sphcore.geometry.faces.Faces``
 instead of the clipped planes. For the region O outside the fluid bounded by closed faces
 (an obstacle, a tank) the divergence theorem gives, face by face,
 

@@ -5,7 +5,7 @@ Each force evaluation first lists the particles within the kernel support 2h of 
 computes for those alone, in one pass (:func:`add_plane_terms`), the exact share, gradient
 and hydrostatic moment (``share.py``), the lattice-error correction and the fill reference
 (``lattice.py``) and the near-wall projector (``normals.py``), adding them into the core's
-:class:`sphcore.equations.WallTerms` arrays. In a tank only a few per cent of the particles
+:class:`sphcore.physics.equations.WallTerms` arrays. In a tank only a few per cent of the particles
 are that close to a wall: the three full passes this replaces took 2.3 ms of a 45 ms step
 at 10^5 particles (one thread), each computing every particle's plane distances again, and
 the plugin's own arrays were added into the core's by three more full passes.

@@ -1,6 +1,6 @@
 """Closed-form radial primitives of the SPH kernels for the wall integrals.
 
-Both kernels of :mod:`sphcore.kernels` are piecewise polynomials in q = r/h (pieces
+Both kernels of :mod:`sphcore.physics.kernels` are piecewise polynomials in q = r/h (pieces
 [0, 1] and [1, 2]), so every radial integral the boundary-integral walls need is a
 piecewise Laurent polynomial in q. They are built here once, at import, as coefficient
 arrays that numba reads as constants (no interpolation error: exact to round-off).

@@ -31,9 +31,10 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import __version__
-from ..case import case_file, read_toml
-from ..errors import CaseError, OutputError
+from sphcore import __version__
+from sphcore.case.model import case_file, read_toml
+from sphcore.errors import CaseError, OutputError
+
 from .grid import Axis, Variant, expand, fold, parse_vary
 from .results import default_error_key, grid, plot_pareto, table, to_dataset  # noqa: F401 (grid: API)
 from .task import run_variant, stop_running
@@ -60,8 +61,8 @@ class Plan:
 
 def plan(case_dir, vary=(), sets=(), t_end=None) -> Plan:
     """Expand and validate; raises :class:`CaseError` naming the key and the variant."""
-    from .. import runner
-    from ..simulation import build_state
+    from sphcore.run import runner
+    from sphcore.run.simulation import build_state
 
     case_dir = Path(case_dir).resolve()
     file = case_file(case_dir)
@@ -178,7 +179,7 @@ def run(p: Plan, output=None, scheduler=None, workers=None, processes=True, time
     directory (default ``<case>/sweep``; each variant's own output in a subdirectory named
     after it) and returns the Dataset. ``ds.attrs["interrupted"]`` is 1 after Ctrl-C (the
     variants not done are recorded as 'cancelled')."""
-    from .. import runner
+    from sphcore.run import runner
 
     distributed = _distributed()
     out = Path(output or p.case_dir / "sweep").resolve()
@@ -252,7 +253,7 @@ def main(args) -> int:
     completed, went unstable or timed out (the sweep's results are what was asked for);
     1 some variant failed (an exception or a lost task: see its message); 2 bad input or
     no Dask, nothing run; 130 interrupted (what finished is written)."""
-    from ..pluginhost import PluginLoadError
+    from sphcore.plugin.pluginhost import PluginLoadError
 
     try:
         if args.scheduler and args.workers:

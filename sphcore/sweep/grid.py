@@ -21,8 +21,8 @@ import itertools
 import re
 from dataclasses import dataclass, field
 
-from ..errors import CaseError
-from ..overrides import fold, key_text, parse_key, parse_set, parse_value  # noqa: F401 (re-exported for the sweep)
+from sphcore.case.overrides import fold, key_text, parse_key, parse_set, parse_value  # noqa: F401 (re-exported for the sweep)
+from sphcore.errors import CaseError
 
 _OPEN, _CLOSE = "[{", "]}"
 

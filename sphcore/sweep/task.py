@@ -108,8 +108,9 @@ def stop_running() -> int:
 def child_main():
     """In the variant's process: read the payload on stdin, run, write the summary."""
     payload = json.loads(sys.stdin.read())
-    from .. import pluginhost, runner
-    from ..errors import CaseError, OutputError
+    from sphcore.errors import CaseError, OutputError
+    from sphcore.plugin import pluginhost
+    from sphcore.run import runner
 
     try:
         summary = public(runner.run(payload["case_dir"], payload["output"],

@@ -1,0 +1,1 @@
+"""Walls as geometry: infinite planes, finite faces (segments, triangles), their grid, meshes from files."""

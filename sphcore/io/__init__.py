@@ -1,0 +1,1 @@
+"""Output: the output directory and its marker, writers' shared behaviour and schedules."""

@@ -1,0 +1,231 @@
+"""A run's output directory: where it is, the marker that proves sph made it, the manifest
+of the files sph wrote there, ``--overwrite`` that deletes only those, and atomic writes.
+
+The marker ``.sphcore-output`` is a JSON file::
+
+    {"written_by": "sphcore", "dir": "/abs/out", "case": "/abs/case/case.toml",
+     "files": ["particles.nc", "vtu/frame_0000.vtu", ...], "dirs": ["vtu"]}
+
+``--overwrite`` trusts it only when it is a regular file (not a link), names this very
+directory (a marker copied elsewhere names another one) and this case; it then deletes
+the regular files it lists (never through a symbolic link, never outside the directory)
+and the listed directories left empty. Anything else in the directory (a user's plot, a
+note, files copied in) is kept. The manifest is brought up to date with every checkpoint
+and at the end of a run: it records the files already listed plus every file modified
+since the run (segment) began, so files that were there before (a user's, kept through an
+overwrite) stay out of it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+
+from sphcore.errors import CaseError, OutputError
+
+MARKER = ".sphcore-output"
+
+
+# -- where -------------------------------------------------------------------------------
+
+def resolve(case, output=None) -> Path:
+    """The output directory: ``--output`` as given, else ``output.dir`` under the case
+    directory. ``output.dir`` may not leave the case directory (an absolute path or ``..``):
+    writing, and overwriting, elsewhere takes an explicit ``--output``."""
+    if output is not None:
+        return Path(output)
+    rel = case.config["output"]["dir"]
+    norm = os.path.normpath(rel)
+    if not rel or os.path.isabs(rel) or norm == ".." or norm.startswith(".." + os.sep) or norm == ".":
+        raise CaseError(case.file, "output.dir", f"expected a sub-directory of the case directory, got {rel!r} "
+                        "(write elsewhere with --output DIR)")
+    return case.dir / norm
+
+
+# -- atomic writes ---------------------------------------------------------------------------
+
+def write_atomically(path: Path, write) -> None:
+    """``write(tmp_path)``, fsync, then rename over ``path``: a reader (or a crash, a full
+    disk) sees the old file or the new one, never half of one. Raises OutputError."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        write(tmp)
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError as e:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        raise OutputError(f"cannot write {path}: {e.strerror or e}") from e
+
+
+def write_text_atomically(path: Path, text: str) -> None:
+    write_atomically(path, lambda tmp: Path(tmp).write_text(text))
+
+
+# -- the marker and manifest ---------------------------------------------------------------
+
+def read_marker(out: Path) -> dict | None:
+    """The marker's content, or None when it is missing, a link, not a file or not ours."""
+    m = Path(out) / MARKER
+    try:
+        if m.is_symlink() or not m.is_file() or m.stat().st_size > 64 << 20:
+            return None
+        data = json.loads(m.read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("written_by") != "sphcore":
+        return None
+    if not isinstance(data.get("files"), list) or not isinstance(data.get("dirs"), list):
+        return None
+    return data
+
+
+def _identity(path) -> str:
+    return str(Path(path).resolve()) if path is not None else ""
+
+
+def _inside(out: Path, rel: str) -> Path | None:
+    """``out/rel`` if rel is a plain relative path with no link on the way; else None."""
+    if not isinstance(rel, str) or not rel or os.path.isabs(rel):
+        return None
+    parts = Path(rel).parts
+    if any(p in ("..", ".") for p in parts):
+        return None
+    p = out
+    for part in parts:
+        p = p / part
+        if p.is_symlink():
+            return None
+    return p
+
+
+def _linked(out: Path, rel: str) -> bool:
+    """Whether a link lies on the way to ``out/rel`` (a harmless bad entry is just skipped)."""
+    p = out
+    for part in Path(rel).parts:
+        if part in ("..", ".") or os.path.isabs(part):
+            return False
+        p = p / part
+        if p.is_symlink():
+            return True
+    return False
+
+
+class Manifest:
+    """Keeps the marker's list of sph's files up to date during one run segment."""
+
+    def __init__(self, out: Path, case_file=None):
+        self.out = Path(out)
+        self.case = _identity(case_file)
+        self.start_ns = time.time_ns() - 2_000_000_000  # coarse file-system clocks: 2 s slack
+        old = read_marker(self.out) or {}
+        self.files = set(old.get("files", []))
+        self.dirs = set(old.get("dirs", []))
+
+    def update(self) -> None:
+        """Record every file listed before plus every file modified in this segment."""
+        for root, dirnames, filenames in os.walk(self.out):
+            rel_root = os.path.relpath(root, self.out)
+            for d in dirnames:
+                if not os.path.islink(os.path.join(root, d)):
+                    self.dirs.add(os.path.normpath(os.path.join(rel_root, d)))
+            for name in filenames:
+                full = os.path.join(root, name)
+                try:
+                    st = os.lstat(full)
+                except OSError:
+                    continue
+                rel = os.path.normpath(os.path.join(rel_root, name))
+                if rel == MARKER or not os.path.isfile(full) or os.path.islink(full):
+                    continue
+                if st.st_mtime_ns >= self.start_ns:
+                    self.files.add(rel)
+        self.files = {f for f in self.files if os.path.lexists(self.out / f)}
+        self.write()
+
+    def write(self) -> None:
+        data = {"written_by": "sphcore", "dir": _identity(self.out), "case": self.case,
+                "files": sorted(self.files), "dirs": sorted(self.dirs)}
+        write_text_atomically(self.out / MARKER, json.dumps(data, indent=1) + "\n")
+
+
+# -- preparing the directory ----------------------------------------------------------------
+
+def _remove_listed(out: Path, marker: dict) -> list[str]:
+    """Delete the marker's files (regular files only) and its directories left empty;
+    returns what stays (not sph's). A listed path that has become a symbolic link (or lies
+    behind one) is refused before anything is deleted: the new run would write through it."""
+    for rel in marker["files"] + marker["dirs"]:
+        if isinstance(rel, str) and _inside(out, rel) is None and _linked(out, rel):
+            raise OutputError(f"refusing to overwrite {out}: {rel} is a symbolic link now (sph never deletes or "
+                              "writes through one); remove the link or pass --output DIR")
+    for rel in marker["files"]:
+        p = _inside(out, rel)
+        if p is not None and p.is_file() and not p.is_symlink():
+            try:
+                p.unlink()
+            except OSError as e:
+                raise OutputError(f"cannot remove {p}: {e.strerror}") from e
+    for rel in sorted(marker["dirs"], key=lambda r: -len(Path(r).parts)):
+        p = _inside(out, rel)
+        if p is not None and p.is_dir() and not any(p.iterdir()):
+            p.rmdir()
+    (out / MARKER).unlink(missing_ok=True)
+    return sorted(str(p.relative_to(out)) for p in out.rglob("*"))
+
+
+def _remove_stale_temporaries(out: Path, marker: dict | None) -> None:
+    """A SIGKILL in the middle of an atomic write leaves its temporary (``.NAME.tmp``, or
+    ``checkpoint.tmp.npz``): remove those of sph's own files, and only those."""
+    names = set((marker or {}).get("files", [])) | {"summary.json", "front.csv", MARKER, "checkpoint.npz"}
+    for rel in names:
+        p = _inside(out, rel) if isinstance(rel, str) else None
+        if p is None:
+            continue
+        for tmp in (p.with_name(f".{p.name}.tmp"), p.with_suffix(".tmp.npz") if p.suffix == ".npz" else None):
+            if tmp is not None and tmp.is_file() and not tmp.is_symlink():
+                try:
+                    tmp.unlink()
+                except OSError:
+                    pass  # harmless: the next write of that file replaces it
+
+
+def prepare(out: Path, case_file=None, overwrite=False, restart=False) -> Manifest:
+    """Create (or reuse, on restart) the output directory; never clobber what is not sph's.
+    Raises OutputError (exit status 2: nothing written)."""
+    out = Path(out)
+    if out.is_symlink():
+        raise OutputError(f"output directory {out} is a symbolic link: sph writes only into a real directory "
+                          f"(pass the link's target with --output)")
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"output path {out} exists and is not a directory")
+    if restart and out.is_dir():
+        _remove_stale_temporaries(out, read_marker(out))
+    if out.exists() and any(out.iterdir()) and not restart:
+        if not overwrite:
+            raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or --output DIR")
+        marker = read_marker(out)
+        if marker is None:
+            raise OutputError(f"refusing to overwrite {out}: it was not written by sph (no valid {MARKER} file "
+                              "listing sph's files; an empty one, from an older sph, lists none: delete it yourself)")
+        if marker.get("dir") != _identity(out):
+            raise OutputError(f"refusing to overwrite {out}: its {MARKER} was written for {marker.get('dir')!r} "
+                              "(a copied marker proves nothing)")
+        if case_file is not None and marker.get("case") not in ("", _identity(case_file)):
+            raise OutputError(f"refusing to overwrite {out}: it holds the output of another case "
+                              f"({marker.get('case')}); pass --output DIR")
+        _remove_listed(out, marker)  # refuses (before deleting) when a listed path became a link
+        _remove_stale_temporaries(out, marker)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise OutputError(f"cannot create output directory {out}: {e.strerror}") from e
+    manifest = Manifest(out, case_file)
+    manifest.write()
+    return manifest

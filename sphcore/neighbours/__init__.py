@@ -1,0 +1,1 @@
+"""Neighbour search: cell keys and their sort, the cell grid, kept pair lists."""

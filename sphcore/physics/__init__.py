@@ -1,0 +1,1 @@
+"""What is computed: kernels, equation of state, pair terms, corrections, forces, integrators, time step, checks."""

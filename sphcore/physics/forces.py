@@ -1,0 +1,229 @@
+"""One force evaluation: the rates (accelerations, density rates) of the current state.
+
+    [hook sph_before_forces] -> sources (fluid + [hook sph_extra_sources]) -> cell grid
+    -> [hook sph_wall_terms] -> kernel-gradient matrices (optional) -> pair sums
+    (:func:`sphcore.physics.equations.sph_rates`) -> [hook sph_accelerations]
+
+Called by the integrators (:mod:`sphcore.physics.integrators`) whenever they need rates; the
+pressure field the momentum equation uses is kept here too (:class:`PressureField`).
+Only what the case models runs; ``ctx.counters`` records which kernels did.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from sphcore.errors import Instability
+from sphcore.neighbours.cellgrid import CellGrid
+from sphcore.neighbours.pairlist import PairList
+from sphcore.physics import eos
+from sphcore.physics.corrections import neighbour_sums
+from sphcore.physics.equations import WORK_COLUMNS, Fields, WallTerms, sph_rates, uniform_acceleration
+
+
+class PressureField:
+    """The equation of state applied to the particles.
+
+    ``state.p`` is always the physical pressure (Pa, for output and probes). With modified
+    pressure (Batchelor 1967) the momentum equation uses its dynamic part
+    P = p - rho0 g (surface_level - z) instead, kept in ``p_dyn``.
+    """
+
+    def __init__(self, prm):
+        self.prm = prm
+        self.p_dyn = np.zeros(0)
+        self._z = np.zeros(0)  # scratch: height of each particle (m)
+
+    def force_pressure(self, state) -> np.ndarray:
+        """The pressure array the momentum equation uses (Pa)."""
+        if not self.prm.modified_pressure:
+            return state.p
+        if self.p_dyn.shape[0] != state.n:
+            self.p_dyn = np.zeros(state.n)
+        return self.p_dyn
+
+    def update(self, state, counters):
+        """Tait pressure of every particle from its density (:mod:`sphcore.physics.eos`)."""
+        prm = self.prm
+        if not prm.sph:
+            return
+        eos.fill_pressure(state.rho, prm.rho0, prm.c0, prm.gamma, prm.p_background, self.force_pressure(state))
+        if prm.modified_pressure:
+            # p = P + rho0 g (surface - z), in place (this runs twice a step)
+            if self._z.shape[0] != state.n:
+                self._z = np.zeros(state.n)
+            z = self._z
+            np.matmul(state.pos, prm.up, out=z)
+            np.subtract(prm.surface_level, z, out=z)
+            z *= prm.rho0 * prm.g_abs
+            np.add(self.p_dyn, z, out=state.p)
+        counters["eos"] += 1
+
+
+class Forces:
+    """Evaluates rates for one run. ``hook``: the run's :class:`sphcore.plugin.pluginhost.HookRelay`."""
+
+    def __init__(self, ctx, hook, pressure: PressureField):
+        self.ctx, self.hook, self.pressure = ctx, hook, pressure
+        self.wants_walls = "sph_wall_terms" in hook.implemented
+        self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
+        self._L = np.zeros((1, 3, 3))
+        self._grid = None
+        skin = ctx.case.config["neighbours"]["skin"] * ctx.params.support
+        # plugin sources (ghosts) change every step: such runs walk the cells at every evaluation
+        keep = skin > 0 and ctx.params.sph and "sph_extra_sources" not in hook.implemented
+        self.pairs = PairList(ctx.params.support, skin) if keep else None
+        self._shepard = np.zeros(1)
+        self._work = np.zeros((0, WORK_COLUMNS))
+        self._spos = np.zeros((0, ctx.params.dim))
+        self._src_buf = None  # fluid + plugin sources, reused between evaluations
+        self._wall = WallTerms(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0),
+                               False)
+
+    # -- pieces -----------------------------------------------------------------------
+
+    def sources(self) -> Fields:
+        """The fluid followed by any plugin source particles (ghosts), with the pressure the
+        momentum equation uses; with sources, views of arrays reused between evaluations
+        (valid until the next call)."""
+        ctx = self.ctx
+        st = ctx.state
+        extra = [s for s in self.hook.sph_extra_sources(ctx=ctx) if s is not None and s.n]
+        self.n_sources = sum(s.n for s in extra)
+        fluid = Fields(st.pos, st.vel, st.rho, self.pressure.force_pressure(st), st.m)
+        if not extra:
+            return fluid
+        ctx.counters["extra_sources"] += 1
+        n = st.n + self.n_sources
+        if self._src_buf is None or self._src_buf.pos.shape[0] < n or self._src_buf.pos.shape[1] != st.dim:
+            size = n + n // 4  # grows by a quarter: the ghost count changes from step to step
+            self._src_buf = Fields(*(np.empty((size,) + a.shape[1:], a.dtype) for a in fluid))
+        out = Fields(*(b[:n] for b in self._src_buf))
+        for a, b, name in zip(fluid, out, Fields._fields):
+            b[:st.n] = a
+            k = st.n
+            for s in extra:
+                part = getattr(s, name)
+                b[k:k + s.n] = part
+                k += s.n
+        return out
+
+    def grid(self, pos, count=True) -> CellGrid:
+        """The cell grid of ``pos``, rebuilt in the arrays of the last one (no allocation)."""
+        try:
+            if self._grid is None:
+                self._grid = CellGrid(pos, self.ctx.params.support)
+            else:
+                self._grid.rebuild(pos)
+        except OverflowError as e:
+            self._search_failed(pos, e)
+        if count:
+            self.ctx.counters["neighbour_search"] += 1
+        return self._grid
+
+    def pair_view(self, src: Fields):
+        """The grid view the pair loop walks: with a kept pair list (:mod:`sphcore.neighbours.pairlist`,
+        ``neighbours.skin`` > 0) when the run has no plugin sources, else a fresh cell grid."""
+        if self.pairs is None or self.n_sources:
+            return self.grid(src.pos).view
+        self.ctx.counters["neighbour_search"] += 1
+        return self._kept_view(src.pos)
+
+    def reorder_plan(self, pos):
+        """The permutation that puts the particles in cell order (new index k = old index
+        ``order[k]``), or None when they are in it already: the kept pair list's order (the
+        list stays valid, see :meth:`sphcore.neighbours.pairlist.PairList.follow`), else a fresh grid's."""
+        if self.pairs is None:
+            return self.grid(pos, count=False).order
+        view = self._kept_view(pos)
+        return None if self.pairs.sorted else view.order
+
+    def _kept_view(self, pos):
+        """The kept pair list's view of ``pos`` (rebuilt when due, counted)."""
+        try:
+            view, rebuilt = self.pairs.view_of(pos)
+        except OverflowError as e:
+            self._search_failed(pos, e)
+        if rebuilt:
+            self.ctx.counters["pair_list_builds"] += 1
+        return view
+
+    def reordered(self, order):
+        """The particles were permuted by ``order`` (from :meth:`reorder_plan`)."""
+        if self.pairs is not None:
+            self.pairs.follow(order)
+
+    def _search_failed(self, pos, e):
+        ctx = self.ctx
+        far = int(np.argmax(np.abs(pos - np.median(pos, axis=0)).sum(axis=1)))
+        pid = int(ctx.state.id[far]) if far < ctx.state.n else -1
+        raise Instability(ctx.step, ctx.t, pid, f"neighbour search failed: {e}") from None
+
+    def wall_terms(self) -> WallTerms:
+        """Per-particle wall terms from the plugins that supply them (``sph_wall_terms``)."""
+        if not self.wants_walls:
+            return self._wall
+        n, dim = self.ctx.state.n, self.ctx.params.dim
+        if self._wall.share.shape[0] != n:
+            self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)),
+                                   np.zeros(n), True)
+        w = self._wall
+        w.share[:] = 0.0
+        w.grad[:] = 0.0
+        w.hydro[:] = 0.0
+        w.normals[:] = 0.0
+        w.fill[:] = 0.0
+        self.hook.sph_wall_terms(ctx=self.ctx, terms=w)
+        self.ctx.counters["wall_terms"] += 1
+        return w
+
+    def _buffers(self, n, n_src):
+        prm = self.ctx.params
+        if prm.kernel_gradient and self._L.shape[0] != n:
+            self._L = np.zeros((n, 3, 3))
+        if self._work.shape[0] < n_src:
+            self._work = np.zeros((n_src + n_src // 4, WORK_COLUMNS))
+            self._spos = np.zeros((self._work.shape[0], self.ctx.params.dim))
+
+    # -- the evaluation ---------------------------------------------------------------
+
+    def evaluate(self, acc, drho):
+        """Fill ``acc`` (n, dim) and ``drho`` (n,) with the rates of the current state."""
+        ctx = self.ctx
+        st, prm, counters = ctx.state, ctx.params, ctx.counters
+        counters["rates"] += 1
+        if not prm.sph:
+            uniform_acceleration(prm.gravity, acc)
+        else:
+            self.hook.sph_before_forces(ctx=ctx)
+            src = self.sources()
+            view = self.pair_view(src)
+            wall = self.wall_terms()
+            self._buffers(st.n, src.pos.shape[0])
+            if prm.kernel_gradient:
+                neighbour_sums(st.n, src, view, prm, True, self._L, False, self._shepard)
+                counters["kernel_gradient_correction"] += 1
+            n_src = src.pos.shape[0]
+            sph_rates(st.n, src, view, prm, self._L, wall, acc, drho, self._work[:n_src], self._spos[:n_src],
+                      numba.get_num_threads())
+            counters["continuity"] += 1
+            counters["momentum"] += 1
+            if prm.alpha > 0 or prm.beta > 0:
+                counters["artificial_viscosity"] += 1
+            if prm.nu > 0:
+                counters["laminar_viscosity"] += 1
+            if prm.delta > 0:
+                counters["density_diffusion"] += 1
+        self.hook.sph_accelerations(ctx=ctx, acc=acc)
+
+    def shepard_density(self, out):
+        """out <- Shepard-filtered density (Chen et al. 1999, CSPH zeroth order) over the
+        fluid and any plugin sources (ghosts complete the sums at walls)."""
+        ctx = self.ctx
+        if self._shepard.shape[0] != ctx.state.n:
+            self._shepard = np.zeros(ctx.state.n)
+        src = self.sources()
+        grid = self.grid(src.pos)
+        neighbour_sums(ctx.state.n, src, grid.view, ctx.params, False, self._L, True, self._shepard)
+        out[:] = self._shepard

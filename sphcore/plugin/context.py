@@ -1,0 +1,100 @@
+"""The run context: everything a plugin's hooks may read or change, in one documented object.
+
+Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
+
+====================  ===================================================================
+``ctx.state``         :class:`sphcore.physics.particles.ParticleState`, the integrated particles
+                      (pos, vel, rho, p, m, radius, kind, id). The core reorders them by
+                      cell every few steps: read arrays inside a hook, never keep them.
+``ctx.params``        :class:`sphcore.physics.params.Params`, every physical and numerical
+                      constant of the run (h, support, kernel_id, rho0, c0, gamma, tait_b,
+                      gravity, up, ...), frozen; also an argument to numba kernels.
+``ctx.walls``         :class:`sphcore.geometry.planes.Planes`, the wall planes of the case.
+``ctx.case``          :class:`sphcore.case.model.Case`, the validated case: ``ctx.case.config[table]``
+                      holds a plugin's options with defaults filled in.
+``ctx.t``             simulated time (s) at the start of the next step.
+``ctx.step``          steps completed.
+``ctx.dt``            the last step (s); 0 before the first.
+``ctx.t_end``         simulated time the run goes to (s).
+``ctx.output_dir``    pathlib.Path of the run's output, or None (no output).
+``ctx.restarting``    True when the run continues from a checkpoint: at ``sph_setup`` the
+                      particles, clock, stats and kept state are those of the checkpoint.
+``ctx.force_pressure`` the pressure the momentum equation uses (Pa, (n,)): ``state.p``,
+                      or with modified pressure its dynamic part. Plugins may change it in
+                      ``sph_before_forces`` (e.g. a free surface held at zero).
+``ctx.acc``           (n, dim) the integrator's last accelerations (m/s^2), read only: those
+                      of the current state between steps with the leapfrog, of the start of
+                      the step in ``sph_after_integrate`` and with Euler.
+``ctx.counters``      collections.Counter of the core's kernel calls (for tests, summary).
+``ctx.stats(plugin)`` the plugin's own dict of figures: merged into summary.json under
+                      the plugin's name and kept across restarts (JSON numbers/strings).
+``ctx.kept(plugin)``  the plugin's own dict of state to keep across a restart (numbers,
+                      strings, lists or numpy arrays); restored before ``sph_setup``.
+====================  ===================================================================
+
+The context is built by :class:`sphcore.run.simulation.Simulation`; plugins import its type
+from :mod:`sphcore.api`.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+
+class RunContext:
+    """See the module docstring for every attribute."""
+
+    def __init__(self, case, params, state, output_dir: Path | None = None, restarting: bool = False,
+                 plugin_name=None):
+        self.case = case
+        self.params = params
+        self.state = state
+        self.walls = case.planes
+        self.output_dir = output_dir
+        self.restarting = restarting
+        self.t, self.step, self.dt = 0.0, 0, 0.0
+        self.t_end = case.config["time"]["t_end"]
+        self.counters: Counter = Counter()
+        self._stats: dict[str, dict] = {}
+        self._kept: dict[str, dict] = {}
+        self._plugin_name = plugin_name or (lambda plugin: type(plugin).__name__)
+        self._names: dict[int, tuple] = {}  # id(plugin) -> (plugin, name): see _name_of
+        self._pressure = None  # the force pressure owner (sphcore.physics.forces.PressureField)
+        self._rates = None  # the integrator (owns the accelerations)
+
+    # -- fields owned elsewhere -----------------------------------------------------
+
+    @property
+    def force_pressure(self) -> np.ndarray:
+        return self._pressure.force_pressure(self.state)
+
+    @property
+    def acc(self) -> np.ndarray:
+        return self._rates.acc
+
+    # -- per-plugin namespaces --------------------------------------------------------
+
+    def stats(self, plugin) -> dict:
+        """The figures of ``plugin`` (an instance, or its registered name): in the summary
+        under that name, and in every checkpoint."""
+        return self._stats.setdefault(plugin if isinstance(plugin, str) else self._name_of(plugin), {})
+
+    def kept(self, plugin) -> dict:
+        """State of ``plugin`` that a checkpoint keeps and a restart restores."""
+        return self._kept.setdefault(plugin if isinstance(plugin, str) else self._name_of(plugin), {})
+
+    def _name_of(self, plugin) -> str:
+        """The registered name of ``plugin``, looked up once per plugin (pluggy's lookup walks
+        every registered plugin; the reflective walls ask on every step). The plugin is kept
+        beside its name, so that its id is not reused while the entry exists."""
+        entry = self._names.get(id(plugin))
+        if entry is None:
+            entry = self._names[id(plugin)] = (plugin, self._plugin_name(plugin))
+        return entry[1]
+
+    def all_stats(self) -> dict[str, dict]:
+        """Every plugin's figures, by plugin name (only those that have any)."""
+        return {name: dict(s) for name, s in self._stats.items() if s}

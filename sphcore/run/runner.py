@@ -1,0 +1,230 @@
+"""Run a case directory end to end: load, prepare the output directory, step, summarise.
+
+Used by the CLI (``sph run``) and by sweeps; returns the summary as a dict.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numba
+
+from sphcore.case.model import apply_overrides, case_file, parse_override, read_toml, validate
+from sphcore.case.overrides import key_text
+from sphcore.errors import CaseError, Instability, OutputError
+from sphcore.io import outdir
+from sphcore.plugin import pluginhost
+from sphcore.run import budget, checkpoint, relax, resume, threads
+from sphcore.run.progress import Progress
+
+MARKER = outdir.MARKER  # only directories whose marker proves it are overwritten (see outdir)
+
+
+class Stopped(Exception):
+    """SIGINT or SIGTERM arrived; a checkpoint was written."""
+
+    def __init__(self, signum):
+        self.signum = signum
+        super().__init__(f"stopped by {signal.Signals(signum).name}")
+
+
+def _blame_option(err: CaseError, overrides, t_end) -> CaseError:
+    """A CaseError about a key given on the command line names the option, not case.toml."""
+    if t_end is not None and err.key == "time.t_end":
+        return CaseError("--t-end", err.key, err.expected)
+    for text in reversed(list(overrides or ())):
+        path = parse_override(text)[0] if isinstance(text, str) else text[0]
+        dotted = key_text(path)
+        if err.key == dotted or err.key.startswith(dotted + ".") or err.key.startswith(dotted + "["):
+            return CaseError("--set", err.key, err.expected)
+    return err
+
+
+def load(case_dir, overrides=(), t_end=None):
+    """(case, plugin manager) for a case directory, with --set overrides applied."""
+    file = case_file(case_dir)
+    raw = apply_overrides(read_toml(file), overrides)
+    if t_end is not None:
+        raw = apply_overrides(raw, [(["time", "t_end"], t_end)])
+    try:
+        case = validate(raw, file, pluginhost.option_schemas(file, raw))
+        budget.check_scales(case)
+        budget.check_memory(case)  # particles and memory, before anything is allocated
+        relax.check(case)
+        pm = pluginhost.make_manager(case.config["plugins"]["use"], file)
+        pluginhost.configure(pm, case)  # plugins check their own tables
+    except CaseError as e:
+        raise _blame_option(e, overrides, t_end) from None
+    return case, pm
+
+
+def output_path(case, output=None) -> Path:
+    """--output as given, else output.dir inside the case directory (see outdir.resolve)."""
+    return outdir.resolve(case, output)
+
+
+def prepare_output(out: Path, overwrite=False, restart=False, case_file=None) -> "outdir.Manifest":
+    """Create the output directory; never clobber one silently (sweeps call this too)."""
+    if restart and not (Path(out) / checkpoint.NAME).exists():
+        raise CaseError(Path(out) / checkpoint.NAME, "--restart", "no checkpoint to restart from")
+    return outdir.prepare(out, case_file, overwrite, restart)
+
+
+def peak_memory_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: kB
+
+
+def _jsonable(o):
+    """numpy scalars and arrays in a summary, as JSON numbers and lists."""
+    return o.tolist() if hasattr(o, "tolist") else float(o)
+
+
+def _write_json(path: Path, data: dict):
+    outdir.write_text_atomically(path, json.dumps(data, indent=2, default=_jsonable) + "\n")
+
+
+def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restart=False, progress=None,
+        quiet=False) -> dict:
+    case, pm = load(case_dir, overrides, t_end)
+    out = output_path(case, output)
+    mode = "off" if quiet else (progress or case.config["output"]["progress"])
+    saved = None
+    if restart:  # continue the same run only: case, version and directory must match (issue 13)
+        saved = checkpoint.read_meta(out)
+        resume.verify(saved, case, out, out / checkpoint.NAME)
+    # sizing the first step below evaluates the forces: that compiles the force kernels on a
+    # fresh machine (said before it starts; checked after it, the cache would always hold them)
+    if mode != "off" and not kernels_cached(case.config["case"]["dim"]):
+        print("[sph] compiling kernels, once (about 10 s; later runs load them from the cache)",
+              file=sys.stderr, flush=True)
+    if mode != "off" and not restart and case.config["relax"]["time"] > 0:
+        print(f"[sph] relaxing the start: {case.config['relax']['time']:g} s of damped motion before t = 0",
+              file=sys.stderr, flush=True)
+    # particles and plugins are set up, and the first step sized, before anything touches
+    # the disk: a case that fails there leaves the output directory as it was
+    try:
+        sim = budget.simulation(case, pm, out, restarting=restart)
+    except CaseError as e:  # the relaxation's errors name its key, which may have come from --set
+        raise _blame_option(e, overrides, t_end) from None
+    relaxed = sim.ctx.stats("core").get("relax")
+    if relaxed and mode != "off" and not restart:
+        print(f"[sph] relaxed in {relaxed['wall_time_s']:.1f} s: particles moved up to {relaxed['max_move_dx']:.3g} dx, "
+              f"last speed {relaxed['last_speed_m_s']:.2g} m/s", file=sys.stderr, flush=True)
+    budget.check_first_step(sim)
+    manifest = prepare_output(out, overwrite, restart, case.file)
+    past = resume.history(saved)
+    stop = {"signum": None}
+
+    def on_signal(signum, frame):
+        stop["signum"] = signum
+
+    # signal handlers can only be installed from the main thread (a Dask worker runs tasks
+    # in threads): elsewhere the run just has no checkpoint-on-signal
+    old = ({s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+           if threading.current_thread() is threading.main_thread() else {})
+    bar = Progress(sim.t_end, sim.state.n, mode, case.config["output"]["log_interval_s"])
+    start, step0, status, message = time.perf_counter(), sim.step, "failed", "an unexpected error (a bug: see the traceback)"
+    clock = resume.CheckpointClock(case.config["output"]["checkpoint_every_s"],
+                                   case.config["output"]["checkpoint_every_dt"], sim.t)
+
+    def segments(state, wall):
+        return past["segments"] + [{"steps": sim.step - step0, "wall_time_s": wall,
+                                    "t_start": saved["t"] if saved else 0.0, "t_end": sim.t, "status": state}]
+
+    def save_checkpoint(state="running"):
+        # the checkpoint carries the run's identity (checked by --restart) and its history,
+        # so that the summary after a restart covers every segment
+        wall = time.perf_counter() - start
+        checkpoint.save(sim, out, {**resume.identity(case, out), "segments": segments(state, wall),
+                                   "wall_time_total_s": past["wall_time_s"] + wall})
+        manifest.update()
+
+    tuner, threads_before = threads.tuner_for(case.config), numba.get_num_threads()
+    numba.set_num_threads(tuner.current)
+    try:
+        if not restart:
+            save_checkpoint()  # a restart point exists before any frame, whatever stops the run
+        if sim.step == 0:  # a fresh run, or a restart from that first checkpoint: frame 0
+            sim.output()
+        while not sim.done():
+            t0 = time.perf_counter()
+            sim.advance()
+            count = tuner.after_step(time.perf_counter() - t0)
+            if count != numba.get_num_threads():
+                numba.set_num_threads(count)
+            sim.output()
+            bar.update(sim)
+            if stop["signum"] is not None:
+                save_checkpoint("stopped")
+                raise Stopped(stop["signum"])
+            if clock.due(sim.t):
+                save_checkpoint()
+        sim.output(final=True)
+        save_checkpoint("completed")
+        status, message = "completed", ""
+    except Instability as e:
+        status, message = "unstable", str(e)
+    except CaseError as e:  # found only while stepping (no limit on dt any more): exit 1, output kept
+        status, message = "unstable", f"at step {sim.step}, t = {sim.t:.6g} s: {e}"
+    except OutputError as e:
+        # no new checkpoint: the last one (periodic or at the start) matches the files on disk
+        status, message = "output_error", (f"{e}; the last checkpoint and the files before it are kept (--restart)"
+                                           if (out / checkpoint.NAME).exists() else
+                                           f"{e}; no checkpoint could be written: run again with --overwrite")
+    except Stopped as e:
+        status, message = "stopped", f"{e}; checkpoint written, continue with --restart"
+        stop["stopped_by"] = e.signum
+    finally:
+        bar.close()
+        numba.set_num_threads(threads_before)
+        for s, h in old.items():
+            signal.signal(s, h)
+        wall = time.perf_counter() - start
+        total_wall = past["wall_time_s"] + wall
+        steps = sim.step  # the whole run, every segment (a restart continues the count)
+        summary = {
+            "case": case.name, "status": status, "message": message, "output_dir": str(out),
+            "t": sim.t, "wall_time_s": total_wall, "steps": steps, "n_particles": sim.state.n,
+            "particle_steps_per_s": steps * sim.state.n / total_wall if total_wall > 0 else 0.0,
+            "peak_memory_mb": peak_memory_mb(),
+            "c0": sim.params.c0, "h": sim.params.h, "plugins": case.config["plugins"]["use"],
+            "counters": dict(sim.counters),
+            "threads": tuner.summary(),
+            "segments": segments(status, wall),
+            "config": case.config,  # the validated case after --set: what post-processing reads
+        }
+        # each of these may meet a full disk (front.csv, summary.json): what was written
+        # before is kept, the writers are still closed, and the run reports the error
+        for write in (lambda: summary.update(pluginhost.summaries(pm, sim.ctx)),
+                      lambda: pm.hook.sph_finish(ctx=sim.ctx),
+                      lambda: _write_json(out / "summary.json", summary),
+                      manifest.update):
+            try:
+                write()
+            except OutputError as e:
+                if summary["status"] in ("completed", "stopped"):
+                    summary["status"] = "output_error"
+                    summary["message"] = f"{e}; the last checkpoint is kept (--restart)"
+                elif summary["status"] != "failed":
+                    summary["message"] += f"; also {e}"
+    summary["_sim"] = sim
+    summary["_signum"] = stop.get("stopped_by")
+    return summary
+
+
+def kernels_cached(dim: int = 2) -> bool:
+    """Whether numba's cache holds the force kernel of a ``dim``-dimensional run already
+    (else the first step compiles it; the pair loop is built per dimension)."""
+    from sphcore.physics import equations
+
+    try:  # where numba itself keeps it (in-tree __pycache__, or the user-wide fallback)
+        places = [Path(equations._RATES[dim, False]._cache._cache_path)]
+    except AttributeError:  # another numba: look where it caches by default
+        places = [Path(equations.__file__).parent / "__pycache__"]
+    return any(any(p.glob(f"equations._sph_rates_{dim}d*.nbi")) for p in places if p.is_dir())
