@@ -13,6 +13,7 @@ import sys
 
 from sphcore import __version__
 from sphcore.errors import CaseError, OutputError
+from sphcore.jit import prepare
 
 
 def _parser():
@@ -73,6 +74,7 @@ def _fail(msg, status):
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
+    prepare()
     if args.command == "sweep":
         from sphcore.sweep import main as sweep_main
 

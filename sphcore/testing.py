@@ -21,6 +21,7 @@ except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
 from sphcore.case.model import validate
+from sphcore.jit import prepare
 from sphcore.physics.params import derive
 from sphcore.plugin import pluginhost
 from sphcore.plugin.context import RunContext
@@ -105,6 +106,7 @@ def run_case(directory, text: str = TINY_CASE, plugins=None, tables=None, **run_
 def context(text: str = TINY_CASE, file="case.toml", output_dir=None, plugins=None):
     """A RunContext of the case in ``text`` with its initial particles (no run, no plugin
     set-up): for calling a plugin's hooks directly in a test."""
+    prepare()
     raw = tomllib.loads(textwrap.dedent(text))
     if plugins is not None:
         raw.setdefault("plugins", {})["use"] = list(plugins)

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
 
+from sphcore.jit import prepare
 from sphcore.run import runner
 from sphcore.run.simulation import Simulation
 from sphcore.testing import write_case  # noqa: F401  (the tests import it from here)
@@ -26,6 +27,8 @@ settings.register_profile("ci", derandomize=True, database=None, print_blob=True
                           suppress_health_check=[HealthCheck.too_slow])
 settings.register_profile("dev", print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci" if os.environ.get("CI") else "dev"))
+
+prepare()  # tests call kernels directly too: the process settings a run makes first
 
 # A small valid 2D case: a 10 x 10 block of fluid (dx = 0.02 m) resting in a 1 m box.
 GOOD_CASE = """

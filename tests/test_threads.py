@@ -179,9 +179,9 @@ def test_a_restart_may_change_the_thread_settings_and_keeps_the_bits(tmp_path):
 
 
 @pytest.mark.parametrize("given", [None, "0", "passive"])
-def test_openmp_wait_defaults_are_set_at_import_and_a_users_setting_wins(given):
-    """sphcore sets a passive wait with a short spin (sphcore/__init__.py) before numba
-    starts its threads, unless the user set them."""
+def test_openmp_wait_defaults_are_set_before_the_first_kernel_and_a_users_setting_wins(given):
+    """sphcore.jit.prepare sets a passive wait with a short spin before numba starts its
+    threads, unless the user set them; importing sphcore (or its run package) sets nothing."""
     import os
     import subprocess
     import sys
@@ -189,6 +189,10 @@ def test_openmp_wait_defaults_are_set_at_import_and_a_users_setting_wins(given):
     env = {k: v for k, v in os.environ.items() if k not in ("GOMP_SPINCOUNT", "OMP_WAIT_POLICY")}
     if given is not None:
         env["GOMP_SPINCOUNT"] = env["OMP_WAIT_POLICY"] = given
-    out = subprocess.run([sys.executable, "-c", "import os, sphcore; print(os.environ['GOMP_SPINCOUNT'], "
-                          "os.environ['OMP_WAIT_POLICY'])"], env=env, capture_output=True, text=True, check=True)
-    assert out.stdout.split() == ([given, given] if given else ["1000", "passive"])
+    code = ("import os, sphcore, sphcore.run.runner, sphcore.api; from sphcore.jit import prepare; "
+            "print(os.environ.get('GOMP_SPINCOUNT'), os.environ.get('OMP_WAIT_POLICY')); prepare(); "
+            "print(os.environ['GOMP_SPINCOUNT'], os.environ['OMP_WAIT_POLICY'])")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    before, after = out.stdout.splitlines()
+    assert before.split() == [str(given), str(given)]
+    assert after.split() == ([given, given] if given else ["1000", "passive"])

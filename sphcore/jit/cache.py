@@ -7,7 +7,7 @@ function from another module (a call, or ``inline="always"``, such as
 cache keeps the old machine code, silently. Measured 2026-11-24: an edit of
 ``wall_completion.py`` had no effect on a run until ``equations.py`` was touched.
 
-:func:`refresh` runs once when sphcore is imported, before any compiled function is called:
+:func:`refresh` runs once per process (:func:`sphcore.jit.prepare`), before any compiled function is called:
 it compares a stamp of every Python source file of sphcore and of its plugins (path,
 size, modification time) with the stamp saved beside the caches; when they differ it
 removes those packages' cache files (``*.nbi`` / ``*.nbc``, numba's own; nothing else) from

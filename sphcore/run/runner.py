@@ -19,6 +19,7 @@ from sphcore.case.model import apply_overrides, case_file, parse_override, read_
 from sphcore.case.overrides import key_text
 from sphcore.errors import CaseError, Instability, OutputError
 from sphcore.io import outdir
+from sphcore.jit import prepare
 from sphcore.plugin import pluginhost
 from sphcore.run import budget, checkpoint, relax, resume, threads
 from sphcore.run.progress import Progress
@@ -48,6 +49,7 @@ def _blame_option(err: CaseError, overrides, t_end) -> CaseError:
 
 def load(case_dir, overrides=(), t_end=None):
     """(case, plugin manager) for a case directory, with --set overrides applied."""
+    prepare()  # before any kernel of the run: OpenMP settings, numba's cache checked
     file = case_file(case_dir)
     raw = apply_overrides(read_toml(file), overrides)
     if t_end is not None:
