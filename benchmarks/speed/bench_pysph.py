@@ -1,8 +1,8 @@
 """sphcore against PySPH on PySPH's own 2D dam break, whole process, side by side.
 
-    python benchmarks/bench_pysph.py [--pairs 5] [--threads 1 2] [--pysph PATH]
+    python benchmarks/speed/bench_pysph.py [--pairs 5] [--threads 1 2] [--pysph PATH]
 
-Runs ``sph run benchmarks/pysph_dam_break`` (the geometry and constants of PySPH 1.0b2's
+Runs ``sph run benchmarks/speed/pysph_dam_break`` (the geometry and constants of PySPH 1.0b2's
 example ``dam_break_2d``: 1 m x 2 m column, 4 m tank, dx = 0.03 m, 0.3 s) and
 ``pysph run dam_break_2d --disable-output --tf 0.3`` alternately, ``--pairs`` times per
 thread count (the order flips every pair), after one warm-up run of each (numba's and

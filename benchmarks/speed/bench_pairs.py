@@ -1,6 +1,6 @@
 """Where a step's time goes: the pair loop alone on a frozen state, then a step by stages.
 
-    python benchmarks/bench_pairs.py [CASE] [--at 0.15] [--calls 200] [--steps 1000]
+    python benchmarks/speed/bench_pairs.py [CASE] [--at 0.15] [--calls 200] [--steps 1000]
 
 Runs CASE (default ``cases/dam_break``) up to ``--at`` seconds of simulated time, then
 
@@ -33,7 +33,7 @@ from sphcore.physics.equations import sph_rates
 from sphcore.run import runner
 from sphcore.run.simulation import Simulation
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def frozen_pair_loop(sim, calls: int) -> tuple[float, int]:

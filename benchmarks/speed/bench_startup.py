@@ -1,7 +1,7 @@
 """Where a whole ``sph run`` process spends its time before and while it steps: imports,
 the case, the set-up, numba's first calls, the steps.
 
-    python benchmarks/bench_startup.py [CASE] [--steps N]
+    python benchmarks/speed/bench_startup.py [CASE] [--steps N]
 
 Run in a fresh process (this script is one): numpy's and numba's imports, sphcore's,
 ``runner.load`` (the case and its plugins), the ``Simulation`` (particles, parameters, the
@@ -10,7 +10,7 @@ first numba call: numba loads its typing registries there), the first-step check
 called in a step), then ``--steps`` more (default: to the case's end) and their mean.
 Every numba dispatcher's first call is timed too (loading its cached machine code, or
 compiling it when there is no cache) and listed, slowest first. No output is written.
-CASE defaults to ``benchmarks/pysph_dam_break``, the case of ``bench_pysph.py``, whose
+CASE defaults to ``benchmarks/speed/pysph_dam_break``, the case of ``bench_pysph.py``, whose
 whole process this splits. Figures are printed, never asserted.
 """
 
@@ -46,7 +46,7 @@ mark("import sphcore")
 import argparse  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
+HERE = Path(__file__).resolve().parent
 FIRST_CALLS: list[tuple[str, float]] = []
 _compile_for_args = dispatcher.Dispatcher._compile_for_args
 
@@ -61,7 +61,7 @@ def _timed_first_call(self, *args, **kwargs):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("case", nargs="?", default=str(ROOT / "benchmarks" / "pysph_dam_break"))
+    ap.add_argument("case", nargs="?", default=str(HERE / "pysph_dam_break"))
     ap.add_argument("--steps", type=int, default=None, help="steps after the first five (default: to the end)")
     a = ap.parse_args()
     dispatcher.Dispatcher._compile_for_args = _timed_first_call

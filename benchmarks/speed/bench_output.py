@@ -2,7 +2,7 @@
 schedules, every 0.01 s) against the same run without them, at the case's resolution and
 at about 10x more particles.
 
-    python benchmarks/bench_output.py [--case cases/dam_break] [--t-end 0.3] [--scales 1 10] [--repeat 1]
+    python benchmarks/speed/bench_output.py [--case cases/dam_break] [--t-end 0.3] [--scales 1 10] [--repeat 1]
 
 Each run is ``sph run`` in a fresh process on a temporary copy of the case, with and
 without writers alternating on the same machine (``--without`` sets ``plugins.use`` of the
@@ -41,7 +41,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 # ``sph ARGV`` (sphcore.cli.main) with every Simulation.output call timed; the seconds go

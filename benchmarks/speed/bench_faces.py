@@ -7,8 +7,8 @@ reflective kernel alone on that step's motion (start = end - dt v, the drift of 
 step), and the kernel's share of the step. The cost should not grow with F: each
 particle tests only the faces listed in the grid cells around it.
 
-    python benchmarks/bench_faces.py [--faces 0 80 1000 10000] [--steps 5] [--repeat 5]
-    python benchmarks/bench_faces.py --wall-model     # the wall model's share instead
+    python benchmarks/speed/bench_faces.py [--faces 0 80 1000 10000] [--steps 5] [--repeat 5]
+    python benchmarks/speed/bench_faces.py --wall-model     # the wall model's share instead
 
 With ``--wall-model`` each F runs the case with reflective walls alone and with the wall
 model (``wall_integral``: planes and faces; the faces' terms exact and from the table, see

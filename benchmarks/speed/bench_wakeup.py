@@ -1,6 +1,6 @@
 """What a parallel loop costs after serial work: the second thread's wake-up.
 
-    NUMBA_NUM_THREADS=2 python benchmarks/bench_wakeup.py [--n 18224] [--gaps 0 50 200] [--calls 500] [--load 0]
+    NUMBA_NUM_THREADS=2 python benchmarks/speed/bench_wakeup.py [--n 18224] [--gaps 0 50 200] [--calls 500] [--load 0]
 
 A step of sphcore is several parallel loops (numba's prange: fork and join, no barrier
 inside) with serial work between them. numba's OpenMP workers spin for

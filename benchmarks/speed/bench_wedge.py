@@ -11,7 +11,7 @@ With the paper's one-wall-at-a-time rule a particle at the apex bounces between 
 walls (with CR = 0 the projections never finish: about 825 reflections per particle per
 step and the guard); a contact with both walls is now resolved as one.
 
-    python benchmarks/bench_wedge.py [--angle 7] [--steps 2000]
+    python benchmarks/speed/bench_wedge.py [--angle 7] [--steps 2000]
 
 Figures are printed, never asserted.
 """

@@ -2,7 +2,7 @@
 block of water at rest in a box, at several sizes, with peak memory and the share of the
 step spent in the boundary hook (sph_after_integrate: the reflective kernel).
 
-    python benchmarks/bench_step.py [--sizes 10000 100000 1000000] [--steps 20] [--plugins reflective]
+    python benchmarks/speed/bench_step.py [--sizes 10000 100000 1000000] [--steps 20] [--plugins reflective]
 
 Figures are printed, never asserted: run by hand on a quiet machine.
 """

@@ -6,7 +6,7 @@ plain Tait pressure), stepped with: the reflective walls alone (base); + the wal
 run in alternation, ``--pairs`` times each, and the median wall time per step is compared:
 share = (t_variant - t_base) / t_variant, the part of the variant's step the addition takes.
 
-    python benchmarks/bench_wall_model.py [--n 100000] [--steps 20] [--pairs 5]
+    python benchmarks/speed/bench_wall_model.py [--n 100000] [--steps 20] [--pairs 5]
 
 Figures are printed, never asserted: run by hand on a quiet machine.
 """

@@ -5,7 +5,7 @@ A fluid block filling a box at spacing dx (particles at cell centres, h = 1.3 dx
 second for the whole box, and for the subsets near exactly one wall (single-plane path) and
 near two or more walls (edges / corners: the polygon path), each timed on its own array.
 
-    python benchmarks/bench_wall_share.py [--threads N] [--repeat R]
+    python benchmarks/speed/bench_wall_share.py [--threads N] [--repeat R]
 """
 
 from __future__ import annotations

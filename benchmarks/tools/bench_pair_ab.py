@@ -1,21 +1,21 @@
 """Two pair loops side by side in one process: another checkout's ``sphcore/physics/equations.py``
 (A) against this one's (B), on the same frozen state, interleaved.
 
-    python benchmarks/bench_pair_ab.py OTHER_EQUATIONS_PY [CASE] [--at 0.15] [--rounds 21]
+    python benchmarks/tools/bench_pair_ab.py OTHER_EQUATIONS_PY [CASE] [--at 0.15] [--rounds 21]
         [--set KEY=VALUE ...]
 
     git worktree add /tmp/before HEAD~1       # for example: the commit before a change
-    NUMBA_NUM_THREADS=1 python benchmarks/bench_pair_ab.py /tmp/before/sphcore/physics/equations.py \\
-        benchmarks/pysph_dam_break
+    NUMBA_NUM_THREADS=1 python benchmarks/tools/bench_pair_ab.py /tmp/before/sphcore/physics/equations.py \\
+        benchmarks/speed/pysph_dam_break
 
-CASE (default ``benchmarks/pysph_dam_break``) runs up to ``--at`` seconds of simulated time
+CASE (default ``benchmarks/speed/pysph_dam_break``) runs up to ``--at`` seconds of simulated time
 with this checkout; then A's ``sph_rates`` and B's are called on copies of the same
 arguments, alternately, ``--rounds`` times each (about 2 million particle evaluations a
 round, A first in even rounds and B first in odd ones), and the script prints whether they give the same bits, the fastest and the median
 milliseconds per call of each, and B / A as the ratio of the fastest calls and as the
 median of the rounds' ratios. On a machine whose speed drifts within minutes, rounds that
 alternate in one process see the same drift; separate runs of
-``benchmarks/bench_pairs.py`` do not.
+``benchmarks/speed/bench_pairs.py`` do not.
 
 Run it first with a copy of this checkout's own file as A (``git worktree add /tmp/same
 HEAD``): that A/A run shows what the script reads when nothing differs. On 2026-11-26's
@@ -48,7 +48,7 @@ from sphcore.case.overrides import parse_set
 from sphcore.run import runner
 from sphcore.run.simulation import Simulation
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def load_other(path: Path):
@@ -62,7 +62,7 @@ def load_other(path: Path):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("other", type=Path, help="the other checkout's sphcore/physics/equations.py (A)")
-    ap.add_argument("case", nargs="?", default=str(ROOT / "benchmarks" / "pysph_dam_break"))
+    ap.add_argument("case", nargs="?", default=str(ROOT / "benchmarks" / "speed" / "pysph_dam_break"))
     ap.add_argument("--at", type=float, default=0.15, help="simulated time to run to first (s)")
     ap.add_argument("--rounds", type=int, default=21)
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",

@@ -1,6 +1,6 @@
 """One thread against two on a quiet and on a loaded machine, whole process, side by side.
 
-    python benchmarks/bench_loaded.py [CASE] [--pairs 5] [--load 0 1] [--set KEY=VALUE ...]
+    python benchmarks/speed/bench_loaded.py [CASE] [--pairs 5] [--load 0 1] [--set KEY=VALUE ...]
 
 Runs ``sph run CASE`` (default: the seed's dam break without output writers) with
 ``NUMBA_NUM_THREADS=1``, with ``=2`` and the adaptive thread count (the default,
@@ -26,7 +26,7 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 VARIANTS = {  # label: (NUMBA_NUM_THREADS, extra --set)
     "1 thread": (1, []),
     "2 adaptive": (2, []),

@@ -1,7 +1,7 @@
 """Cost and still-water accuracy of the wall treatments: ``ghost``, ``reflective`` and both.
 
-    python benchmarks/bench_boundaries.py [--sizes 10000 40000 160000] [--steps 20] [--case still|dambreak]
-    python benchmarks/bench_boundaries.py --accuracy
+    python benchmarks/speed/bench_boundaries.py [--sizes 10000 40000 160000] [--steps 20] [--case still|dambreak]
+    python benchmarks/speed/bench_boundaries.py --accuracy
 
 Speed: the same 2D case for every mode (still water filling the tank bottom, or a
 dam-break column in the left quarter of a tank), one fresh process per mode and size so

@@ -1,9 +1,9 @@
 """Run a case to its end and save its final particles by id; or compare two saved states.
 
-    python benchmarks/final_state.py run CASE_DIR OUT.npz [--set KEY=VALUE ...] [--t-end T]
-    python benchmarks/final_state.py compare A.npz B.npz
-    python benchmarks/final_state.py suite OUT_DIR            # the runs of SUITE, one .npz each
-    python benchmarks/final_state.py compare-suite A_DIR B_DIR
+    python benchmarks/tools/final_state.py run CASE_DIR OUT.npz [--set KEY=VALUE ...] [--t-end T]
+    python benchmarks/tools/final_state.py compare A.npz B.npz
+    python benchmarks/tools/final_state.py suite OUT_DIR            # the runs of SUITE, one .npz each
+    python benchmarks/tools/final_state.py compare-suite A_DIR B_DIR
 
 For checking that a change keeps results bit for bit: save the state with the old commit's
 checkout, then with the new one, and compare. ``compare`` prints, per array, whether the two
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EVERYTHING = ["density_diffusion.delta=0.1", "density_diffusion.hydrostatic=true", "fluid.nu=1e-6",
               "corrections.kernel_gradient=true", "viscosity.beta=0.5"]
 #: name -> (case directory, t_end (s), --set overrides)

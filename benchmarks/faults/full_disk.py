@@ -4,7 +4,7 @@ the summary or front.csv. Each run must exit 1 with one line, leave no temporary
 a readable checkpoint and netCDF file; after freeing the space ``--restart`` must finish
 with the uninterrupted run's end state, bit for bit. Needs root (mount); Linux only.
 
-    sudo python benchmarks/full_disk.py --free 0,8,32,64,128,256,512,768,1024,1536
+    sudo python benchmarks/faults/full_disk.py --free 0,8,32,64,128,256,512,768,1024,1536
 
 FREE in KiB. The suite injects ENOSPC at each write point instead (tests/test_run_survival.py).
 """
@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
+sys.path.insert(0, str(HERE.parents[1] / "tests"))
 
 from conftest import write_case  # noqa: E402
 from test_run_lifecycle import CASE, checkpoint_by_id, netcdf_frames, sph_command, stray_files  # noqa: E402

@@ -1,7 +1,7 @@
 """SIGKILL a run at random moments, ``--restart`` it each time, and compare the end state
 with an uninterrupted run, bit for bit (issue 13). The suite does 3 kills; this does many.
 
-    python benchmarks/kill_restart.py --kills 12 --seed 1
+    python benchmarks/faults/kill_restart.py --kills 12 --seed 1
 
 Prints the kills that landed on a running process, the segments the summary records and
 whether the final particles and every netCDF frame equal the uninterrupted run's.
@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))  # the suite's helpers: one kill procedure, not two
+sys.path.insert(0, str(HERE.parents[1] / "tests"))  # the suite's helpers: one kill procedure, not two
 
 from conftest import write_case  # noqa: E402
 from test_run_lifecycle import CASE  # noqa: E402

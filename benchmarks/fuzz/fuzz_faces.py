@@ -37,8 +37,8 @@ The starts on the walls matter: a sub-segment starting within an ulp of r from a
 face once passed through it (about 1 in 1,000 such starts; tests/test_reflective_faces.py,
 test_touching_*); ``--on-wall 0`` leaves such starts only to contact points in corners.
 
-    python benchmarks/fuzz_faces.py                 # 10^7 trajectories
-    python benchmarks/fuzz_faces.py --n 2e5
+    python benchmarks/fuzz/fuzz_faces.py                 # 10^7 trajectories
+    python benchmarks/fuzz/fuzz_faces.py --n 2e5
 """
 
 from __future__ import annotations

@@ -6,8 +6,8 @@ log-uniform from 1e-4 to 100 domain lengths, random CR (0, 1 and in between), wi
 without a random acceleration, Eq. 2 at the contact or at the end point. After the
 kernel every particle is checked against every plane (d >= r - 1e-9 r).
 
-    python benchmarks/fuzz_reflective.py            # 10^7 trajectories
-    python benchmarks/fuzz_reflective.py --n 2e6 --batch 5e5
+    python benchmarks/fuzz/fuzz_reflective.py            # 10^7 trajectories
+    python benchmarks/fuzz/fuzz_reflective.py --n 2e6 --batch 5e5
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 from sphcore_plugins.reflective.collision import face_arrays, outside_mask, reflect
 from sphcore_plugins.reflective.corner import scratch
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the test domains
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))  # the test domains
 from domains import box, random_directions, random_polytope, random_rotation, sample_inside, wedge  # noqa: E402
 
 KINDS = ("wedge5-2d", "wedge5-3d", "polytope-2d", "polytope-3d", "box-2d", "box-3d", "wedge-2d", "wedge-3d")
