@@ -1,17 +1,19 @@
-"""Plot every probe of a run against its experiment and print the error figures.
+"""Probes: every probe of a run plotted against its experiment, with the error figures.
 
-    python postprocessing/probes.py RUN_DIR [--windows WIDTH]
+Reads   RUN/probes.nc, written by the probes plugin (RUN: a run's output directory).
+Writes  RUN/probe_<name>.png for every probe (a name sph itself never writes): a pressure
+        probe that names a reference as p/(rho g H) against t sqrt(g/H) with Buchner's
+        points, or against t/T (T = sqrt(H/g)) with Lobovsky's 2.5-97.5 % band shaded and
+        its median; other pressure probes in Pa against s, depth probes in m against s.
+        Prints each probe's maximum and, for a probe with a reference, the error figures
+        of the run summary (sphcore_plugins.probes.figures).
 
-Reads ``RUN_DIR/probes.nc`` (written by the ``probes`` plugin). For each pressure probe
-that names a reference: p/(rho g H) against t sqrt(g/H) with Buchner's points, or against
-t/T (T = sqrt(H/g)) with Lobovsky's 2.5-97.5 % band shaded and its median; other pressure
-probes in Pa against s, depth probes in m against s. One ``probe_<name>.png`` per probe
-beside the run (a name sph itself never writes). The error figures are those of the run
-summary (:mod:`sphcore_plugins.probes.figures`); ``--windows WIDTH`` also prints, for each
-pressure probe with a reference, the means of simulation and experiment over consecutive
-windows of WIDTH in the experiment's time scale (:func:`figures.window_means`). A missing
-directory, a run without ``probes.nc`` or a WIDTH that is not > 0 prints one line on
-stderr and exits with status 2.
+``--windows WIDTH`` also prints, for each pressure probe with a reference, the means of
+simulation and experiment over consecutive windows of WIDTH in the experiment's time scale
+(figures.window_means). A missing directory, a run without probes.nc or a WIDTH that is not
+> 0: one line on stderr, exit status 2.
+
+    python postprocessing/probes.py cases/dam_break_buchner/output
 """
 
 from __future__ import annotations
@@ -22,42 +24,23 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from runs import RunError, open_run, pyplot, refuse
 
+from sphcore_plugins.gauges import reference
+from sphcore_plugins.probes import figures
+
+PROG = Path(__file__).name
 PNG = "probe_{}.png"
 
 
-def _text(chars) -> list[str]:
-    import netCDF4
-
-    return [s.strip() for s in netCDF4.chartostring(np.asarray(chars)).tolist()]
-
-
-def read(path: Path) -> dict:
-    """The probes of ``path`` (probes.nc): {t, rho0, g, probes: [{name, kind, reference, H, values}]}."""
-    import netCDF4
-
-    with netCDF4.Dataset(path) as ds:
-        ds.set_auto_maskandscale(False)
-        t = np.array(ds["time"][:])
-        ok = np.isfinite(t)  # a sample left incomplete by a failed write has no time
-        names, refs = _text(ds["probe_name"][:]), _text(ds["probe_reference"][:])
-        kinds, heights = np.array(ds["probe_kind"][:]), np.array(ds["probe_H"][:])
-        p, d = np.array(ds["pressure"][:])[ok], np.array(ds["depth"][:])[ok]
-        rho0, g = float(ds.getncattr("rho0")), float(ds.getncattr("g"))
-    probes = [{"name": n, "kind": "pressure" if k == 0 else "depth", "reference": r or None,
-               "H": None if not np.isfinite(hh) else float(hh), "values": (p if k == 0 else d)[:, i]}
-              for i, (n, r, k, hh) in enumerate(zip(names, refs, kinds, heights))]
-    return {"t": t[ok], "rho0": rho0, "g": g, "probes": probes}
+def read(path) -> dict:
+    """The probes of ``path`` (a probes.nc or the run directory holding it), as
+    :meth:`runs.Run.probes` reads them: {t, rho0, g, probes: [{name, kind, reference, H, values}]}."""
+    return open_run(path).probes()
 
 
 def plot(run, probe, t, rho0, g, png):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from sphcore_plugins.gauges import reference
-
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4))
     ref, height, v = probe["reference"], probe["H"], probe["values"]
     if probe["kind"] == "depth":
@@ -93,9 +76,6 @@ def plot(run, probe, t, rho0, g, png):
 
 def print_windows(probe, t, rho0, g, width):
     """The window means of a referenced pressure probe, one line per window."""
-    from sphcore_plugins.gauges import reference
-    from sphcore_plugins.probes import figures
-
     ref, height = probe["reference"], probe["H"]
     kind = reference.SERIES[ref].kind
     rows = figures.window_means(t * math.sqrt(g / height), probe["values"] / (rho0 * g * height),
@@ -107,33 +87,22 @@ def print_windows(probe, t, rho0, g, width):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("run", help="a run's output directory (holding probes.nc)")
     ap.add_argument("--windows", type=float, default=None, metavar="WIDTH",
                     help="print window means of p/(rho g H), simulation against experiment, windows of WIDTH")
     args = ap.parse_args(argv)
-    if args.windows is not None and not (math.isfinite(args.windows) and args.windows > 0):
-        print(f"probes.py: error: --windows: expected a width > 0, got {args.windows}", file=sys.stderr)
-        return 2
-    run = Path(args.run)
-    path = run / "probes.nc"
-    if not run.is_dir():
-        print(f"probes.py: error: {run}: no such run directory", file=sys.stderr)
-        return 2
-    if not path.is_file():
-        print(f"probes.py: error: {run}: no probes.nc (was the probes plugin in plugins.use?)", file=sys.stderr)
-        return 2
     try:
-        data = read(path)
-    except (OSError, RuntimeError, KeyError) as err:
-        print(f"probes.py: error: {path}: cannot read: {err}", file=sys.stderr)
-        return 2
-    from sphcore_plugins.probes import figures
-
+        if args.windows is not None and not (math.isfinite(args.windows) and args.windows > 0):
+            raise RunError(f"--windows: expected a width > 0, got {args.windows}")
+        run = open_run(args.run)
+        data = run.probes()
+    except RunError as err:
+        return refuse(PROG, err)
     t = data["t"]
     for probe in data["probes"]:
-        png = run / PNG.format(probe["name"])
-        plot(run, probe, t, data["rho0"], data["g"], png)
+        png = run.dir / PNG.format(probe["name"])
+        plot(run.dir, probe, t, data["rho0"], data["g"], png)
         v = probe["values"]
         unit = "Pa" if probe["kind"] == "pressure" else "m"
         i = int(np.argmax(v)) if v.size else 0

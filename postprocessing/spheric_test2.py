@@ -1,10 +1,10 @@
-"""SPHERIC test 2 (Kleefsman et al. 2005): compare a run's probes with the experiment.
+"""SPHERIC test 2 (Kleefsman et al. 2005): a run's depth and pressure probes against the experiment.
 
-    python postprocessing/spheric_test2.py RUN_DIR [--span T0 T1]
-
-Reads ``RUN_DIR/probes.csv`` (the ``probes`` plugin of ``cases/dam_break_obstacle_3d``)
-and the experiment shipped with sphcore (``reference.kleefsman()``). Prints, over the span
-the run covers (or ``--span``):
+Reads   RUN/probes.csv, written by the probes plugin of cases/dam_break_obstacle_3d (probes
+        named H1-H4 and P1-P4; a run with some of them is compared on those), and the
+        experiment shipped with sphcore (sphcore_plugins.gauges.reference.kleefsman).
+Writes  RUN/spheric_test2_depths.png and RUN/spheric_test2_pressures.png (run and
+        experiment, probe by probe) and prints, over the span the run covers (or --span):
 
 - water depth H1-H4: RMS of (run - experiment) in m, the experiment interpolated at the
   run's sample times; for H1-H3 (dry at the start) the front's arrival, the first time the
@@ -21,8 +21,10 @@ the run covers (or ``--span``):
   against its own period, and a figure that a few acoustic samples of a weakly
   compressible model hardly move (the peak is one sample).
 
-Writes ``spheric_test2_depths.png`` and ``spheric_test2_pressures.png`` beside the run.
-A missing directory or file: one line on stderr, exit status 2.
+A missing directory, a run without probes.csv or without any of these probes: one line on
+stderr, exit status 2.
+
+    python postprocessing/spheric_test2.py cases/dam_break_obstacle_3d/output
 """
 
 from __future__ import annotations
@@ -32,22 +34,16 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from runs import RunError, open_run, pyplot, refuse
 
+from sphcore_plugins.gauges.reference import kleefsman
+
+PROG = Path(__file__).name
+DEPTHS, PRESSURES = ("H1", "H2", "H3", "H4"), ("P1", "P2", "P3", "P4")
 IMPACT_PA = 2000.0  # first-impact threshold (Pa)
 FRONT_M = (0.02, 0.05)  # the front's arrival at a dry depth probe: depth above these (m)
 WINDOW_S = 0.2  # the first impact's peak is searched this long after its arrival (s)
 MEAN_S = 0.01  # the running mean of the smoothed peak (s)
-
-
-def read_probes(path: Path) -> dict:
-    """Columns of probes.csv by probe name ("time", "H1", "P1", ...; units stripped)."""
-    with open(path) as f:
-        header = f.readline().strip().split(",")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    out = {}
-    for k, name in enumerate(header):
-        out["time" if name == "time_s" else name.rsplit("_", 1)[0]] = data[:, k]
-    return out
 
 
 def arrival(t, p, threshold=IMPACT_PA):
@@ -93,13 +89,13 @@ def compare(run: dict, exp: dict, span) -> dict:
     t0, t1 = span if span else (0.0, float(t[-1]))
     out = {"span_s": [t0, t1]}
     sel = (t >= t0) & (t <= t1)
-    for h in ("H1", "H2", "H3", "H4"):
+    for h in DEPTHS:
         if h in run:
             ref = np.interp(t[sel], exp["t"], exp[h])
             out[f"{h}_rms_m"] = float(np.sqrt(np.mean((run[h][sel] - ref) ** 2)))
             if h != "H4":
                 out[f"{h}_front"] = [(d, arrival(t, run[h], d), arrival(exp["t"], exp[h], d)) for d in FRONT_M]
-    for p in ("P1", "P2", "P3", "P4"):
+    for p in PRESSURES:
         if p in run:
             ta_run, ta_exp = arrival(t, run[p]), arrival(exp["t"], exp[p])
             # the same window for both records: WINDOW_S, or what the run has after its arrival
@@ -117,10 +113,7 @@ def compare(run: dict, exp: dict, span) -> dict:
 
 
 def plot(run: dict, exp: dict, out_dir: Path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     t1 = float(run["time"][-1])
     for group, unit, fname in (("H", "m", "depths"), ("P", "Pa", "pressures")):
         fig, axes = plt.subplots(4, 1, figsize=(8, 10), sharex=True)
@@ -139,35 +132,37 @@ def plot(run: dict, exp: dict, out_dir: Path):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("run_dir", type=Path)
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("run_dir", help="the output directory of a run of cases/dam_break_obstacle_3d (or its probes.csv)")
     ap.add_argument("--span", type=float, nargs=2, metavar=("T0", "T1"), help="time span for the depth RMS (s)")
     args = ap.parse_args(argv)
-    path = args.run_dir / "probes.csv"
-    if not path.is_file():
-        print(f"spheric_test2: {path}: no such file (run cases/dam_break_obstacle_3d first)", file=sys.stderr)
-        return 2
-    from sphcore_plugins.gauges.reference import kleefsman
-
-    run, exp = read_probes(path), kleefsman()
+    try:
+        found = open_run(args.run_dir)
+        run = found.probe_table()
+        if not any(name in run for name in DEPTHS + PRESSURES):
+            raise RunError(f"{found.dir / 'probes.csv'}: no probe named H1-H4 or P1-P4 "
+                           f"(expected a run of cases/dam_break_obstacle_3d)")
+    except RunError as err:
+        return refuse(PROG, err)
+    exp = kleefsman()
     res = compare(run, exp, args.span)
     t0, t1 = res["span_s"]
-    print(f"SPHERIC test 2, {args.run_dir}: t in [{t0:.3g}, {t1:.3g}] s")
-    for h in ("H1", "H2", "H3", "H4"):
+    print(f"SPHERIC test 2, {found.dir}: t in [{t0:.3g}, {t1:.3g}] s")
+    for h in DEPTHS:
         if f"{h}_rms_m" in res:
             fronts = "".join(f"; depth > {d:g} m at {a:.4f} s (experiment {b:.4f} s, {a - b:+.4f} s)"
                              for d, a, b in res.get(f"{h}_front", ()))
             print(f"  {h}: depth RMS error {res[f'{h}_rms_m']:.4f} m{fronts}")
-    for p in ("P1", "P2", "P3", "P4"):
+    for p in PRESSURES:
         if p in res:
             r = res[p]
             print(f"  {p}: first impact (p > {IMPACT_PA:.0f} Pa) at {r['arrival_s']:.4f} s (experiment "
                   f"{r['arrival_exp_s']:.4f} s, error {r['arrival_error_s']:+.4f} s); peak {r['peak_Pa']:.0f} Pa "
                   f"(experiment {r['peak_exp_Pa']:.0f} Pa, {100 * r['peak_error']:+.0f} %); peak of the "
-                  f"{1000 * MEAN_S:g} ms mean {r['mean_peak_Pa']:.0f} Pa (experiment {r['mean_peak_exp_Pa']:.0f} Pa); impulse over "
-                  f"{r['window_s']:.3g} s {r['impulse_Pa_s']:.0f} Pa s (experiment {r['impulse_exp_Pa_s']:.0f} Pa s, "
-                  f"ratio {r['impulse_ratio']:.2f})")
-    plot(run, exp, args.run_dir)
+                  f"{1000 * MEAN_S:g} ms mean {r['mean_peak_Pa']:.0f} Pa (experiment {r['mean_peak_exp_Pa']:.0f} Pa); "
+                  f"impulse over {r['window_s']:.3g} s {r['impulse_Pa_s']:.0f} Pa s (experiment "
+                  f"{r['impulse_exp_Pa_s']:.0f} Pa s, ratio {r['impulse_ratio']:.2f})")
+    plot(run, exp, found.dir)
     return 0
 
 

@@ -1,41 +1,41 @@
-"""Dam-break surge front x_front(t) from a run's frames, compared with experiment.
+"""Dam break: the surge front x_front(t) from a run's frames, against experiment.
 
-    python postprocessing/wavefront.py RUN_OUTPUT [--a 0.114] [--csv F] [--png F]
+Reads   RUN, the output directory of a 2D dam-break run (or its .pvd / particles.nc): every
+        frame (the vtu or netcdf plugin) and summary.json (the column width a and the far
+        wall, unless given).
+Writes  RUN/wavefront.csv (columns t_s, x_front_m; one row per frame) and RUN/wavefront.png
+        (the front against Cruchaga et al. 2007, the seed paper's SPH values, and Martin &
+        Moyce 1952, n^2 = 2, scaled with a: Z = x/a, T = t sqrt(2 g / a)); prints the errors
+        against them (nan where the run does not reach an experiment's time).
 
-The front definition (a connected chain along the floor, so isolated splashes do not
-count; x_front = tip centre + radius) and the comparison are those of the ``front_gauge``
-plugin (``sphcore_plugins.gauges.front``), so post-processing and in-run gauges agree.
-Reference data: Cruchaga et al. (2007) and the seed paper's SPH values; Martin & Moyce
-(1952) n^2 = 2, scaled with the column width a (Z = x/a, T = t sqrt(2 g / a)).
+The front (a connected chain of particles along the floor, so isolated splashes do not
+count; x_front = tip centre + radius) and the comparison are those of the front_gauge
+plugin (sphcore_plugins.gauges.front), so post-processing and the in-run gauge agree.
+A path that is not a dam-break run: one line on stderr, exit status 2.
+
+    python postprocessing/wavefront.py cases/dam_break/output
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
+from runs import RunError, open_run, pyplot, refuse
 
 from sphcore_plugins.gauges import reference
 from sphcore_plugins.gauges.front import compare, front_position
 
-try:
-    from frames import frames
-    from runs import open_run
-except ImportError:  # imported as postprocessing.wavefront
-    from .frames import frames
-    from .runs import open_run
-
+PROG = Path(__file__).name
 G = 9.81
+SEED_COLUMN_M, SEED_TANK_M = 0.114, 0.42  # the seed's column width and tank length: runs without a config
 
 
 def plot(t, x, a, png):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     cru, mm = reference.cruchaga(), reference.martin_moyce()
     fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot(t, x, "-", label="sphcore")
@@ -51,9 +51,9 @@ def plot(t, x, a, png):
     plt.close(fig)
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("run", help="a run's output directory, .pvd or particles.nc")
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("run", help="a dam-break run's output directory, .pvd or particles.nc")
     ap.add_argument("--a", type=float, help="initial column width (m); default: the run's first fluid block")
     ap.add_argument("--band", type=float, default=2.0, help="floor band height in particle spacings")
     ap.add_argument("--gap", type=float, default=2.0, help="largest gap in the connected front, in spacings")
@@ -62,28 +62,32 @@ def main(argv=None):
     ap.add_argument("--x-wall", type=float, help="opposite wall (m): Martin & Moyce points beyond it are left out; "
                     "default: the run's domain")
     args = ap.parse_args(argv)
-    found = open_run(args.run, "wavefront.py", "dam_break")
-    run, outdir = found.frames, found.dir
-    if found.config:
-        block, dom = found.first_block(), found.config["domain"]
-        if args.a is None:
-            args.a = float(block["max"][0] - block["min"][0]) if block.get("max") is not None \
-                else block["count"][0] * found.config["particles"]["dx"]
-        if args.x_wall is None:
-            args.x_wall = float(dom["max"][0])
-    args.a = 0.114 if args.a is None else args.a  # the seed's column, for runs of older versions
-    args.x_wall = 0.42 if args.x_wall is None else args.x_wall
-    series = [(t, front_position(p, f["radius"], band=args.band, gap=args.gap)) for t, p, f in frames(run)]
+    try:
+        run = open_run(args.run, "dam_break")
+        a, x_wall = args.a, args.x_wall
+        if run.config:
+            lo, hi = run.block_extent(run.first_block())
+            a = hi[0] - lo[0] if a is None else a
+            x_wall = float(run.config["domain"]["max"][0]) if x_wall is None else x_wall
+        a = SEED_COLUMN_M if a is None else a
+        x_wall = SEED_TANK_M if x_wall is None else x_wall
+        series, radius = [], None
+        for t, pos, fields in run.frames():
+            series.append((t, front_position(pos, fields["radius"], band=args.band, gap=args.gap)))
+            radius = fields["radius"] if radius is None else radius
+        if not series:
+            raise RunError(f"{run.frames_file()}: no frame written yet")
+    except RunError as err:
+        return refuse(PROG, err)
     t, x = np.array(series).T
-    csv_path = Path(args.csv or outdir / "wavefront.csv")
+    csv_path = Path(args.csv or run.dir / "wavefront.csv")
     np.savetxt(csv_path, np.c_[t, x], delimiter=",", header="t_s,x_front_m", comments="", fmt="%.6g")
-    plot(t, x, args.a, args.png or outdir / "wavefront.png")
-    radius = next(frames(run))[2]["radius"]
-    res = compare(t, x, args.a, args.x_wall - 2 * float(np.median(radius)))
+    plot(t, x, a, args.png or run.dir / "wavefront.png")
+    res = compare(t, x, a, x_wall - 2 * float(np.median(radius)))
     for k, v in res.items():
         print(f"{k:32s} {v:.4f}" if isinstance(v, float) else f"{k:32s} {v}")
-    return res
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

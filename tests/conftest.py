@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -97,9 +98,21 @@ def good_case(tmp_path) -> Path:
 
 
 def script(name: str):
-    """postprocessing/<name>.py as a module (the scripts are not a package)."""
-    path = Path(__file__).resolve().parents[1] / "postprocessing" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"pp_{name}", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    """A script as a module: postprocessing/<name>.py (the user's toolkit), else the study
+    validation/<case>/<name>.py. The scripts are not a package: run as ``python DIR/X.py``
+    they find their siblings (postprocessing/runs.py) because Python puts DIR first on
+    sys.path; the script's folder is put there here the same way while it loads."""
+    root = Path(__file__).resolve().parents[1]
+    found = [root / "postprocessing" / f"{name}.py", *sorted(root.glob(f"validation/*/{name}.py"))]
+    path = next((p for p in found if p.is_file()), None)
+    if path is None:
+        raise FileNotFoundError(f"no script {name}.py in postprocessing/ or validation/*/")
+    folder = str(path.parent)
+    sys.path.insert(0, folder)
+    try:
+        spec = importlib.util.spec_from_file_location(f"pp_{name}", path)
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(folder)
     return mod
