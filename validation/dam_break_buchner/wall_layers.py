@@ -5,12 +5,13 @@ run's particles.nc (the ``netcdf`` plugin), the fluid particles with xa < x < xb
 binned in layers of one dx from the floor (z = 0), and each layer's mean pressure and
 vertical velocity printed, with rho g dx, the hydrostatic step from one layer to the next.
 
-    python postprocessing/wall_layers.py RUN_DIR --dx 0.015 --x 1.8 2.6 [--layers 4] [--times 0.35 0.4]
+    python validation/dam_break_buchner/wall_layers.py RUN_DIR --dx 0.015 --x 1.8 2.6 [--layers 4] [--times 0.35 0.4]
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import xarray as xr
@@ -29,6 +30,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     path = Path(args.run)
     path = path / "particles.nc" if path.is_dir() else path
+    if not path.is_file():
+        print(f"wall_layers.py: error: {path}: no such file (expected a run's particles.nc, the netcdf plugin's)",
+              file=sys.stderr)
+        return 2
     with xr.open_dataset(path) as ds:
         for k in range(ds.sizes["time"]):
             t = float(ds["time"][k])

@@ -8,7 +8,7 @@ particles far from the side walls), with the reflective walls alone and with the
 model, 2D and 3D, h = 1.3 and 2 dx. What the figures mean is in docs/wall_pressure.md, "The
 floor layer's excess: the continuity's wall completion".
 
-    python postprocessing/wall_divergence.py [--layers K]
+    python validation/dam_break_buchner/wall_divergence.py [--layers K]
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Is one boundary's equilibrium of a tank at rest an equilibrium of another's?
 
-    python postprocessing/tank_cross_start.py [--case cases/hydrostatic_tank] [--relax-with ghost]
+    python validation/hydrostatic_tank/tank_cross_start.py [--case cases/hydrostatic_tank] [--relax-with ghost]
                                               [--run-with wall_integral] [--h 2.0] [--relax 10] [--time 5]
                                               [--run-set KEY=VALUE ...]
 
@@ -36,7 +36,7 @@ from sphcore.run import runner
 from sphcore.run.simulation import Simulation
 from sphcore_plugins.gauges.hydrostatic import layer_errors
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]  # the repository
 
 
 def load(case_dir, boundary: str, h: float, relax: float, t_end: float | None = None, extra=()):

@@ -1,6 +1,6 @@
 """Wall pressure against experiment for each boundary treatment: one table, one plot per probe.
 
-    python postprocessing/wall_pressure.py [--tank-t-end 5.0] [--only buchner,lobovsky,tank,tank_delta,tank_delta_h2,dam_break]
+    python validation/wall_pressure.py [--tank-t-end 5.0] [--only buchner,lobovsky,tank,tank_delta,tank_delta_h2,dam_break]
                                            [--out docs/wall_pressure_runs.md] [--plots docs/wall_pressure]
 
 Runs (probes sampled in-run, no VTU/netCDF frames):
@@ -22,12 +22,14 @@ from __future__ import annotations
 
 import argparse
 import math
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
 from sphcore.run import runner
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[1]  # the repository
 VARIANTS = {
     "reflective": ["reflective"],
     "reflective + wall model": ["reflective", "wall_integral"],
@@ -105,9 +107,8 @@ def main(argv=None):
             print(row, flush=True)
             lines.append(row)
             if key in ("buchner", "lobovsky") and s["status"] == "completed":
-                from probes import main as plot_probes  # postprocessing/probes.py
-
-                plot_probes([str(out)])
+                subprocess.run([sys.executable, str(ROOT / "postprocessing" / "probes.py"), str(out)], check=True,
+                               stdout=subprocess.DEVNULL)
                 for png in out.glob("probe_*.png"):
                     png.replace(plots / f"{key}_{'_'.join(plugins)}_{png.name}")
     Path(args.out).write_text("\n".join(lines) + "\n")

@@ -1,6 +1,6 @@
 """The paper's validations, each boundary treatment, one table.
 
-    python postprocessing/validate.py [--tank-t-end 5.0] [--out docs/validation.md]
+    python validation/validate.py [--tank-t-end 5.0] [--out docs/validation.md]
 
 Runs, without VTU/netCDF output (the gauges measure in-run):
 - dam break (cases/dam_break, 0.3 s) with reflective, ghost, ghost + reflective, and the
@@ -21,7 +21,7 @@ from pathlib import Path
 
 from sphcore.run import runner
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[1]  # the repository
 BOUNDARIES = {"reflective": ["reflective"], "ghost": ["ghost"], "ghost+reflective": ["ghost", "reflective"]}
 PAPER = ['integrator.scheme="euler"', "time.dt=1e-5", 'reflective.velocity="end"',
          'corrections.kernel_gradient=true']
@@ -85,7 +85,7 @@ def main(argv=None):
     print("\n" + table)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text("# Validation: the seed paper's cases with each boundary treatment\n\n"
-                              f"Regenerate with `python postprocessing/validate.py --tank-t-end {args.tank_t_end:g}`.\n\n"
+                              f"Regenerate with `python validation/validate.py --tank-t-end {args.tank_t_end:g}`.\n\n"
                               + table + "\n")
 
 

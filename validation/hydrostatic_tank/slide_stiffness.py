@@ -1,6 +1,6 @@
 """How strongly the tank at rest resists a column of particles sliding along a side wall.
 
-    python postprocessing/slide_stiffness.py [--h 1.3 1.5 1.7 2.0] [--case cases/hydrostatic_tank]
+    python validation/hydrostatic_tank/slide_stiffness.py [--h 1.3 1.5 1.7 2.0] [--case cases/hydrostatic_tank]
 
 The plain-Tait tank (no modified pressure, hydrostatic start, density diffusion as in
 docs/wall_pressure.md) at t = 0, one force evaluation per row: a whole column of particles
@@ -31,7 +31,7 @@ from sphcore.case.overrides import parse_set
 from sphcore.run import runner
 from sphcore.run.simulation import Simulation
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]  # the repository
 BOUNDARIES = {"wall model": '["reflective","wall_integral"]', "ghosts": '["ghost","reflective"]'}
 
 

@@ -1,7 +1,7 @@
 """The first instants of a dam break: the incompressible initial acceleration of a released
 column, and the clock of a record (experiment or run) measured against it.
 
-    python postprocessing/dam_release.py [RUN_DIR] [--probe H4] [--windows 0-0.1 0.04-0.12 ...]
+    python validation/dam_break_obstacle_3d/dam_release.py [RUN_DIR] [--probe H4] [--windows 0-0.1 0.04-0.12 ...]
 
 The theory (the leading-order problem of Korobkin & Yilmaz, "The initial stage of
 dam-break flow", J. Eng. Math. 63 (2009) 293-308; derived here for a reservoir of finite
@@ -57,6 +57,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
+
+from sphcore_plugins.gauges.reference import kleefsman
 
 G = 9.81
 # SPHERIC test 2 (the data file's header): water 0.55 m deep, 1.228 m long, its face at
@@ -120,6 +122,19 @@ def fit_start(t, h, a_z, t0, t1, taus=TAUS):
     return best[1], best[2], best[0]
 
 
+def read_depth(path: Path, probe: str):
+    """(t in s, depth in m) of the depth probe ``probe`` in a probes plugin's probes.csv
+    (columns time_s, then <name>_m or <name>_pa); ValueError naming the file otherwise."""
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True, ndmin=1)
+    except (OSError, ValueError) as err:
+        raise ValueError(f"{path}: cannot read: {err}") from None
+    names = data.dtype.names or ()
+    if "time_s" not in names or f"{probe}_m" not in names:
+        raise ValueError(f"{path}: expected the columns time_s and {probe}_m (a depth probe named {probe})")
+    return data["time_s"], data[f"{probe}_m"]
+
+
 def _window(text):
     try:
         t0, t1 = (float(v) for v in text.split("-"))
@@ -144,15 +159,11 @@ def main(argv=None) -> int:
         if not path.is_file():
             print(f"dam_release: {path}: no such file (run cases/dam_break_obstacle_3d first)", file=sys.stderr)
             return 2
-        sys.path.insert(0, str(Path(__file__).resolve().parent))
-        from spheric_test2 import read_probes
-
-        run = read_probes(path)
-        if args.probe not in run:
-            print(f"dam_release: {path}: no column {args.probe}", file=sys.stderr)
+        try:
+            run = read_depth(path, args.probe)
+        except ValueError as err:
+            print(f"dam_release: {err}", file=sys.stderr)
             return 2
-    from sphcore_plugins.gauges.reference import kleefsman
-
     x = PROBES[args.probe] - FACE_X
     a = surface_acceleration(x)
     print(f"Instantaneous release, H = {DEPTH} m, L = {LENGTH} m: surface at {args.probe}, {x:.3f} m from the face, "
@@ -161,7 +172,7 @@ def main(argv=None) -> int:
     exp = kleefsman()
     records = [("experiment", exp["t"], exp[args.probe])]
     if run is not None:
-        records.append(("run", run["time"], run[args.probe]))
+        records.append(("run", *run))
     print("window (s)   " + "   ".join(f"{name}: start (ms), level (m), rms (mm)" for name, _, _ in records)
           + ("   experiment's lead on the run (ms)" if run is not None else ""))
     for t0, t1 in args.windows:
