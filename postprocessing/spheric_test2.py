@@ -72,6 +72,8 @@ def first_mean_peak(t, p, t_arrival, width=MEAN_S, window=WINDOW_S):
     if w is None or t.size < 2:
         return float("nan")
     k = max(int(round(width / float(np.median(np.diff(t))))), 1)
+    if k > t.size:  # a record shorter than the mean's width has no such mean
+        return float("nan")
     return float(np.convolve(p, np.ones(k) / k, mode="same")[w].max())
 
 
