@@ -1,9 +1,12 @@
-"""Post-processing scripts on runs: the right kind gives figures, anything else one clean line.
+"""The user's toolkit, postprocessing/: each script on a tiny run of its kind gives its figures
+and files with the right numbers; anything else is refused with one clean line and exit 2.
 
-Runs are tiny (sphcore.testing.run_case); the scripts run in a subprocess, as a user runs them."""
+Runs are tiny (sphcore.testing.run_case, 100-150 particles, a few steps); the scripts run in
+a subprocess, as a user runs them (``python postprocessing/X.py``)."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -13,7 +16,11 @@ import pytest
 
 from sphcore.testing import run_case
 
-SCRIPTS = Path(__file__).resolve().parents[1] / "postprocessing"
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTS = ROOT / "postprocessing"
+TOOLKIT = ["wavefront.py", "pressure_profile.py", "probes.py", "spheric_test2.py", "peer_series.py"]
+STUDIES = sorted(p.relative_to(ROOT) for p in (ROOT / "validation").rglob("*.py"))
+RHO_G = 1000.0 * 9.81
 
 TANK = """
 [case]
@@ -36,35 +43,127 @@ use = []
 
 COLUMN = TANK.replace("max = [0.2, 0.2]", "max = [0.06, 0.12]").replace("modified_pressure = true", "")
 
+# a tank 0.3 m deep at rest (modified pressure: exactly hydrostatic), a pressure probe on the
+# floor and a depth probe: named like SPHERIC test 2's, so every probe script reads it
+PROBED = TANK.replace("max = [0.2, 0.3]", "max = [0.2, 0.4]").replace("max = [0.2, 0.2]", "max = [0.2, 0.3]") + """
+[probes]
+every_dt = 0.001
+[[probes.pressure]]
+name = "P1"
+point = [0.1, 0.0]
+[[probes.depth]]
+name = "H2"
+point = [0.1, 0.0]
+"""
+
+# what each script needs besides the path it reads
+EXTRA = {"peer_series.py": ["--reference", "buchner_2002_P1", "--H", "0.3"]}
+
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     root = tmp_path_factory.mktemp("runs")
-    for name, text in (("tank", TANK), ("column", COLUMN)):
-        s = run_case(root / name, text, plugins=["reflective", "netcdf"])
+    for name, text, plugins in (("tank", TANK, ["reflective", "netcdf"]),
+                                ("column", COLUMN, ["reflective", "netcdf", "vtu"]),
+                                ("probed", PROBED, ["reflective", "probes"])):
+        s = run_case(root / name, text, plugins=plugins)
         assert s["status"] == "completed", s["message"]
     return root
 
 
 def script(name, *args):
-    return subprocess.run([sys.executable, str(SCRIPTS / name), *map(str, args)], capture_output=True, text=True)
+    return subprocess.run([sys.executable, str(SCRIPTS / name), *map(str, args)], capture_output=True, text=True,
+                          check=False)
 
 
-@pytest.mark.parametrize("name,kind", [("wavefront.py", "column"), ("pressure_profile.py", "tank")])
-def test_each_script_reads_its_kind_and_writes_beside_the_run(runs, name, kind):
-    out = runs / kind / "output"
+def refused(res, name, path):
+    """Exit status 2 and one line on stderr, ``<script>: error: ...`` naming ``path``."""
+    assert res.returncode == 2, (res.returncode, res.stdout, res.stderr)
+    assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr, res.stderr
+    assert res.stderr.startswith(f"{name}: error: ") and str(path) in res.stderr, res.stderr
+
+
+def png(path):
+    assert path.is_file() and path.read_bytes()[:4] == b"\x89PNG" and path.stat().st_size > 5000, path
+    return True
+
+
+# ---------------------------------------------------------------------------- every script
+
+
+def test_the_toolkit_is_these_scripts():
+    """A script added to postprocessing/ joins the tests below; runs.py is their shared reader."""
+    assert sorted(p.name for p in SCRIPTS.glob("*.py")) == sorted(TOOLKIT + ["runs.py", "rest_stability.py"])
+
+
+@pytest.mark.parametrize("name", TOOLKIT)
+def test_help_says_what_a_script_reads_and_writes(name):
+    res = script(name, "--help")
+    assert res.returncode == 0 and res.stderr == "", res.stderr
+    assert res.stdout.startswith(f"usage: {name} ") and "Reads " in res.stdout and "Writes " in res.stdout
+
+
+@pytest.mark.parametrize("path", STUDIES + [Path("postprocessing/rest_stability.py")], ids=str)
+def test_every_study_answers_help(path):
+    """The studies import what they use (sphcore's in-process API, the gauges)."""
+    res = subprocess.run([sys.executable, str(ROOT / path), "--help"], capture_output=True, text=True, check=False)
+    assert res.returncode == 0 and res.stdout.startswith(f"usage: {path.name} "), res.stderr
+
+
+def test_no_script_edits_sys_path_or_guesses_its_imports():
+    for path in [*SCRIPTS.glob("*.py"), *(ROOT / "validation").rglob("*.py")]:
+        text = path.read_text()
+        assert not re.search(r"sys\.path\s*[.\[=+]", text), path
+        assert not re.search(r"except \(?(ImportError|ModuleNotFoundError)", text), path
+
+
+@pytest.mark.parametrize("name", TOOLKIT)
+def test_an_empty_or_missing_directory_is_refused(tmp_path, name):
+    for path in (tmp_path, tmp_path / "missing"):
+        refused(script(name, path, *EXTRA.get(name, [])), name, path)
+
+
+# ---------------------------------------------------------------------------- frames: wavefront, pressure profile
+
+
+def test_wavefront_of_a_dam_break(runs):
+    """The column is 3 dx wide: the front starts at its edge, 0.06 m, and hardly moves in 4 ms;
+    the .pvd (vtu) and particles.nc (netcdf) of the same run give the same front."""
+    out = runs / "column" / "output"
     before = {p: p.stat().st_mtime_ns for p in out.rglob("*")}
-    res = script(name, out)
+    res = script("wavefront.py", out)
     assert res.returncode == 0, res.stderr
     for p, mtime in before.items():  # nothing sph wrote is touched
         assert p.stat().st_mtime_ns == mtime, p
-    if name == "pressure_profile.py":
-        prof = np.loadtxt(out / "pressure_profile.csv", delimiter=",", skiprows=1)
-        # modified pressure keeps the tank exactly hydrostatic: the default H is the block's 0.2 m
-        np.testing.assert_allclose(prof[:, 1], prof[:, 4], rtol=1e-9)
-    else:
-        front = np.loadtxt(out / "wavefront.csv", delimiter=",", skiprows=1)
-        assert front[0, 1] == pytest.approx(0.06, abs=1e-9)  # the column's width: 3 dx, the tip's edge
+    assert (out / "wavefront.csv").read_text().splitlines()[0] == "t_s,x_front_m"
+    front = np.loadtxt(out / "wavefront.csv", delimiter=",", skiprows=1)
+    assert front.shape[0] >= 2 and front[0, 0] == 0.0 and np.all(np.diff(front[:, 0]) > 0)
+    assert front[0, 1] == pytest.approx(0.06, abs=1e-9)
+    assert np.all((front[:, 1] >= 0.06 - 1e-9) & (front[:, 1] < 0.07))
+    assert png(out / "wavefront.png")
+    printed = dict(line.split() for line in res.stdout.splitlines())
+    assert {"x_front_0.10s_m", "err_cruchaga_0.10s", "rms_rel_err_martin_moyce_T3"} <= printed.keys()
+    assert printed["x_front_0.10s_m"] == "nan"  # the run ends at 4 ms: no experiment's time is reached
+    from_nc = script("wavefront.py", out / "particles.nc", "--csv", out / "nc.csv", "--png", out / "nc.png")
+    assert from_nc.returncode == 0, from_nc.stderr
+    np.testing.assert_array_equal(np.loadtxt(out / "nc.csv", delimiter=",", skiprows=1), front)
+
+
+def test_pressure_profile_of_a_tank_at_rest(runs):
+    """Modified pressure keeps the tank exactly hydrostatic: every layer mean is rho g (H - y),
+    the default H being the block's 0.2 m, and the largest error printed is 0."""
+    out = runs / "tank" / "output"
+    res = script("pressure_profile.py", out)
+    assert res.returncode == 0, res.stderr
+    head = (out / "pressure_profile.csv").read_text().splitlines()[0]
+    assert head == "y_m,p_mean_pa,p_min_pa,p_max_pa,p_hydrostatic_pa,rel_err"
+    prof = np.loadtxt(out / "pressure_profile.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(prof[:, 0], np.arange(0.01, 0.2, 0.02), atol=1e-9)  # 10 layers, centres
+    np.testing.assert_allclose(prof[:, 1], prof[:, 4], rtol=1e-9)
+    np.testing.assert_allclose(prof[:, 4], RHO_G * (0.2 - prof[:, 0]), rtol=1e-6)
+    assert np.all(prof[:, 2] <= prof[:, 1]) and np.all(prof[:, 1] <= prof[:, 3])
+    assert "below the top two layers: 0.000%" in res.stdout
+    assert png(out / "pressure_profile.png")
 
 
 def test_pressure_profile_columns_of_a_tank_at_rest(runs):
@@ -83,14 +182,68 @@ def test_pressure_profile_columns_of_a_tank_at_rest(runs):
 
 @pytest.mark.parametrize("name,kind", [("wavefront.py", "tank"), ("pressure_profile.py", "column")])
 def test_a_run_of_another_kind_is_refused(runs, name, kind):
-    res = script(name, runs / kind / "output")
-    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
-    assert res.stderr.startswith(f"{name}: error: ") and "Traceback" not in res.stderr
+    out = runs / kind / "output"
+    refused(script(name, out), name, out)
 
 
 @pytest.mark.parametrize("name", ["wavefront.py", "pressure_profile.py"])
-def test_a_missing_run_or_a_foreign_directory_is_refused(tmp_path, name):
-    for path in (tmp_path / "missing", tmp_path):
-        res = script(name, path)
-        assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
-        assert "Traceback" not in res.stderr
+def test_a_run_without_frames_is_refused(runs, name):
+    out = runs / "probed" / "output"
+    refused(script(name, out), name, out)
+
+
+# ---------------------------------------------------------------------------- probes: probes, spheric_test2, peer_series
+
+
+def test_probes_of_a_tank_at_rest(runs):
+    """The floor sensor reads rho g H (H = 0.3 m) and the depth gauge 0.3 m, within dx / 2."""
+    out = runs / "probed" / "output"
+    res = script("probes.py", out)
+    assert res.returncode == 0, res.stderr
+    lines = dict(line.split(": ", 1) for line in res.stdout.splitlines())
+    p1, h2 = (float(lines[k].split()[1]) for k in ("P1", "H2"))
+    assert lines["P1"].split()[2] == "Pa" and lines["H2"].split()[2] == "m"
+    assert p1 == pytest.approx(RHO_G * 0.3, rel=0.02)
+    assert h2 == pytest.approx(0.3, abs=0.01)
+    assert png(out / "probe_P1.png") and png(out / "probe_H2.png")
+
+
+def test_spheric_test2_compares_the_probes_it_finds(runs):
+    """P1 and H2 only: the tank is 0.3 m deep from t = 0, so H2 reads ~0.3 m where the
+    experiment's H2 is still dry (its RMS error is ~0.3 m), the front "arrives" at t = 0 and
+    P1 (rho g H = 2.9 kPa > 2 kPa) impacts at once, with a peak of rho g H."""
+    out = runs / "probed" / "output"
+    res = script("spheric_test2.py", out)
+    assert res.returncode == 0, res.stderr
+    assert "  H1:" not in res.stdout and "  P2:" not in res.stdout
+    rms = float(re.search(r"H2: depth RMS error ([0-9.]+) m", res.stdout).group(1))
+    assert rms == pytest.approx(0.3, abs=0.01)
+    assert "depth > 0.02 m at 0.0000 s" in res.stdout
+    impact = re.search(r"P1: first impact \(p > 2000 Pa\) at ([0-9.]+) s .* peak ([0-9]+) Pa", res.stdout)
+    assert float(impact.group(1)) == 0.0
+    assert float(impact.group(2)) == pytest.approx(RHO_G * 0.3, rel=0.02)
+    assert png(out / "spheric_test2_depths.png") and png(out / "spheric_test2_pressures.png")
+
+
+def test_spheric_test2_refuses_a_run_without_its_probes(runs, tmp_path):
+    (tmp_path / "probes.csv").write_text("time_s,other_pa\n0,1\n0.001,2\n")
+    refused(script("spheric_test2.py", tmp_path), "spheric_test2.py", tmp_path / "probes.csv")
+
+
+def test_peer_series_scores_a_runs_csv_column(runs):
+    """The run's probes.csv read as a peer's file (--column P1_pa): the tank's floor pressure,
+    about rho g H with H = 0.3 m, is above 0.1 rho g H from the first sample, so its first
+    rise is at tau = 0, ahead of Buchner's by the experiment's own rise time."""
+    from sphcore_plugins.gauges import reference
+    from sphcore_plugins.probes import figures
+
+    csv = runs / "probed" / "output" / "probes.csv"
+    res = script("peer_series.py", csv, "--column", "P1_pa", *EXTRA["peer_series.py"])
+    assert res.returncode == 0, res.stderr
+    out = dict(line.split(" = ") for line in res.stdout.splitlines())
+    exp = reference.series("buchner_2002_P1")
+    assert float(out["rise_dtau"]) == pytest.approx(-figures.first_rise(exp[:, 0], exp[:, 1]), abs=1e-3)
+    assert out["mae_rhogH"] == "nan"  # 4 ms never reach the scored window, t sqrt(g/H) in [2.6, 5.5]
+    missing = script("peer_series.py", csv, "--column", "P9_pa", *EXTRA["peer_series.py"])
+    refused(missing, "peer_series.py", csv)
+    assert "--column P9_pa" in missing.stderr
