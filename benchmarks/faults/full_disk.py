@@ -1,4 +1,4 @@
-"""A real full disk (issue 13): run the mini dam break into a small tmpfs filled so that only
+"""A real full disk: run the mini dam break into a small tmpfs filled so that only
 FREE bytes are left, for many values of FREE, so the disk fills at a frame, a checkpoint,
 the summary or front.csv. Each run must exit 1 with one line, leave no temporary file and
 a readable checkpoint and netCDF file; after freeing the space ``--restart`` must finish
@@ -6,13 +6,17 @@ with the uninterrupted run's end state, bit for bit. Needs root (mount); Linux o
 
     sudo python benchmarks/faults/full_disk.py --free 0,8,32,64,128,256,512,768,1024,1536
 
-FREE in KiB. The suite injects ENOSPC at each write point instead (tests/test_run_survival.py).
+FREE in KiB. Prints one line per fill level and ``N fill levels, K failed``; exit 1 if any
+failed. Where no tmpfs can be mounted (not root, not Linux, no permission) it says so in
+one line and exits with status 77 (UNAVAILABLE). The suite injects ENOSPC at each write
+point instead (tests/test_run_survival.py).
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -26,10 +30,25 @@ from test_run_lifecycle import CASE, checkpoint_by_id, netcdf_frames, sph_comman
 from test_run_survival import CKPT, assert_same_as_reference  # noqa: E402
 
 GAUGED = CASE.replace('"netcdf"]', '"netcdf", "front_gauge"]')
+#: exit status when no tmpfs can be mounted here: the drill cannot run
+UNAVAILABLE = 77
 
 
 def sph(*argv):
     return subprocess.run(sph_command() + [str(a) for a in argv], capture_output=True, text=True, timeout=300)
+
+
+def mount_tmpfs(mnt: Path, size_mib: int) -> str:
+    """Mount a tmpfs of ``size_mib`` MiB on ``mnt``; "" when mounted, else why not."""
+    if not sys.platform.startswith("linux"):
+        return f"needs Linux (this is {sys.platform})"
+    if os.geteuid() != 0:
+        return "needs root to mount a tmpfs (run it with sudo)"
+    if shutil.which("mount") is None:
+        return "no mount command"
+    res = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_mib}m", "tmpfs", str(mnt)],
+                         capture_output=True, text=True)
+    return "" if res.returncode == 0 else f"mount failed: {res.stderr.strip() or res.returncode}"
 
 
 def main(argv=None) -> int:
@@ -41,14 +60,17 @@ def main(argv=None) -> int:
     failures = 0
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
-        case_dir = write_case(root / "mini_dam", GAUGED)
-        ref = root / "ref"
-        res = sph("run", case_dir, "--output", ref, "--progress", "off", *CKPT)
-        assert res.returncode == 0, res.stderr
         mnt = root / "disk"
         mnt.mkdir()
-        subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={args.size_mib}m", "tmpfs", str(mnt)], check=True)
+        why = mount_tmpfs(mnt, args.size_mib)
+        if why:
+            print(f"full_disk: cannot run here: {why}", file=sys.stderr)
+            return UNAVAILABLE
         try:
+            case_dir = write_case(root / "mini_dam", GAUGED)
+            ref = root / "ref"
+            res = sph("run", case_dir, "--output", ref, "--progress", "off", *CKPT)
+            assert res.returncode == 0, res.stderr
             for free in free_kib:
                 for p_ in mnt.iterdir():
                     subprocess.run(["rm", "-rf", str(p_)], check=True)

@@ -1,5 +1,5 @@
 """SIGKILL a run at random moments, ``--restart`` it each time, and compare the end state
-with an uninterrupted run, bit for bit (issue 13). The suite does 3 kills; this does many.
+with an uninterrupted run, bit for bit. The suite does 3 kills; this does many.
 
     python benchmarks/faults/kill_restart.py --kills 12 --seed 1
 

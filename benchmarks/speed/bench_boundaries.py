@@ -1,7 +1,7 @@
 """Cost and still-water accuracy of the wall treatments: ``ghost``, ``reflective`` and both.
 
     python benchmarks/speed/bench_boundaries.py [--sizes 10000 40000 160000] [--steps 20] [--case still|dambreak]
-    python benchmarks/speed/bench_boundaries.py --accuracy
+    python benchmarks/speed/bench_boundaries.py --accuracy [--relax-s 0.2] [--free-s 1.0]
 
 Speed: the same 2D case for every mode (still water filling the tank bottom, or a
 dam-break column in the left quarter of a tank), one fresh process per mode and size so
@@ -13,8 +13,8 @@ caches), ``--steps`` full steps are timed; the table gives particle-steps per se
 Accuracy (``--accuracy``): the 20 x 20 tank of tests/test_ghost_hydrostatic.py (0.2 m of
 water, dx = 0.01 m, Wendland h = 1.5 dx, alpha = 0.1), per mode: the largest relative
 pressure error below the top two layers against rho0 g (H - y) and the surface drift, after
-0.2 s of dynamic relaxation and over the 1 s free run that follows, and over 1 s from the
-core's hydrostatic start without relaxation.
+0.2 s of dynamic relaxation (``--relax-s``) and over the 1 s free run that follows
+(``--free-s``), and over 1 s from the core's hydrostatic start without relaxation.
 
 Figures are printed, never asserted: run by hand on a quiet machine.
 """
@@ -193,7 +193,7 @@ def _still_water_figures(plugins, relax_s: float, free_s: float) -> dict:
     return {"p_err": err, "drift_dx": drift / TANK_DX, "clearance_dx": clearance / TANK_DX}
 
 
-def accuracy_table():
+def accuracy_table(relax_s: float = 0.2, free_s: float = 1.0):
     ok, why = reflective_importable()
     print(f"still water, {TANK_NX} x {TANK_NY} particles, H = {TANK_H} m, dx = {TANK_DX} m, Wendland h = 1.5 dx, "
           f"alpha = 0.1, leapfrog; pressure error below the top two layers vs rho0 g (H - y)")
@@ -205,8 +205,9 @@ def accuracy_table():
         if "reflective" in mode and not ok:
             print(f"{name:<18} skipped: reflective plugin not importable ({why})")
             continue
-        for label, relax in (("relaxed 0.2 s, then 1 s", 0.2), ("hydrostatic start, 1 s", 0.0)):
-            r = _still_water_figures(mode, relax, 1.0)
+        for label, relax in ((f"relaxed {relax_s:g} s, then {free_s:g} s", relax_s),
+                             (f"hydrostatic start, {free_s:g} s", 0.0)):
+            r = _still_water_figures(mode, relax, free_s)
             print(f"{name:<18} {label:<26} {100 * r['p_err']:>10.2f}% {r['drift_dx']:>12.4f}dx "
                   f"{r['clearance_dx']:>12.4f}dx")
 
@@ -217,13 +218,15 @@ def main():
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--case", choices=("still", "dambreak"), default="still")
     ap.add_argument("--accuracy", action="store_true", help="print the still-water accuracy table instead")
+    ap.add_argument("--relax-s", type=float, default=0.2, help="with --accuracy: dynamic relaxation (s)")
+    ap.add_argument("--free-s", type=float, default=1.0, help="with --accuracy: the free run measured (s)")
     ap.add_argument("--one", help=argparse.SUPPRESS)  # internal: one measurement in this process
     ap.add_argument("--n", type=int, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.one:
         print(json.dumps(measure_one(a.n, a.steps, a.one.split("+"), a.case)))
     elif a.accuracy:
-        accuracy_table()
+        accuracy_table(a.relax_s, a.free_s)
     else:
         speed_table(a.sizes, a.steps, a.case)
 

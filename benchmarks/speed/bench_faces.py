@@ -7,7 +7,7 @@ reflective kernel alone on that step's motion (start = end - dt v, the drift of 
 step), and the kernel's share of the step. The cost should not grow with F: each
 particle tests only the faces listed in the grid cells around it.
 
-    python benchmarks/speed/bench_faces.py [--faces 0 80 1000 10000] [--steps 5] [--repeat 5]
+    python benchmarks/speed/bench_faces.py [--faces 0 80 1000 10000] [--steps 5] [--repeat 5] [--dx 0.01]
     python benchmarks/speed/bench_faces.py --wall-model     # the wall model's share instead
 
 With ``--wall-model`` each F runs the case with reflective walls alone and with the wall
@@ -47,7 +47,7 @@ max = [0.6, 0.6, 0.6]
 min = [0.0, 0.0, 0.0]
 max = [0.5, 0.5, 0.42]
 [particles]
-dx = 0.01
+dx = {dx}
 [physics]
 gravity = [0.0, 0.0, -9.81]
 modified_pressure = false
@@ -81,7 +81,7 @@ def sphere_mesh(path: Path, faces: int, centre=(0.25, 0.25, 0.2), radius=0.1) ->
     return len(tris)
 
 
-def setup(tmp: Path, faces: int, plugins='["reflective"]', sets=()):
+def setup(tmp: Path, faces: int, dx: float, plugins='["reflective"]', sets=()):
     d = tmp / f"f{faces}{len(plugins)}{len(sets) and sets[0][-5:]}"
     d.mkdir()
     walls = ""
@@ -89,7 +89,7 @@ def setup(tmp: Path, faces: int, plugins='["reflective"]', sets=()):
     if faces:
         count = sphere_mesh(d / "sphere.stl", faces)
         walls = '[[domain.walls]]\nshape = "mesh"\nfile = "sphere.stl"'
-    (d / "case.toml").write_text(CASE.format(walls=walls, plugins=plugins))
+    (d / "case.toml").write_text(CASE.format(walls=walls, plugins=plugins, dx=dx))
     case, pm = runner.load(d, list(sets))
     sim = Simulation(case, pm)
     t0 = time.perf_counter()
@@ -103,6 +103,7 @@ def main():
     ap.add_argument("--faces", type=int, nargs="+", default=[0, 80, 1000, 10000])
     ap.add_argument("--steps", type=int, default=5)
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--dx", type=float, default=0.01, help="particle spacing (m): 0.01 is about 10^5 particles")
     ap.add_argument("--wall-model", action="store_true", help="the wall model's share of a step")
     ap.add_argument("--face-terms", nargs="+", default=["exact", "table"], choices=["exact", "table"],
                     help="with --wall-model: wall_integral.faces values to measure")
@@ -117,7 +118,7 @@ def main():
               f"median of {a.repeat}")
         print(f"{'faces':>7} {'particles':>9} {'step ms':>9} {'kernel ms':>10} {'share':>7}")
         for f in a.faces:
-            sim, count, case = setup(Path(tmp), f)
+            sim, count, case = setup(Path(tmp), f, a.dx)
             st = sim.state
             fa = face_arrays(case.faces if count else None, 3, float(st.radius.max()))
             ws = scratch()
@@ -162,8 +163,8 @@ def wall_model_share(a):
         print(f"{'faces':>7} {'particles':>9} {'alone ms':>9}" + "".join(
             f" {m + ' ms':>10} {'share':>7} {'first s':>8}" for m in a.face_terms))
         for f in a.faces:
-            alone, count, _ = setup(Path(tmp), f)
-            models = [setup(Path(tmp), f, '["reflective", "wall_integral"]', [f"wall_integral.faces={m!r}"])[0]
+            alone, count, _ = setup(Path(tmp), f, a.dx)
+            models = [setup(Path(tmp), f, a.dx, '["reflective", "wall_integral"]', [f"wall_integral.faces={m!r}"])[0]
                       for m in a.face_terms]
             ta, tm = [], [[] for _ in models]
             for _ in range(a.repeat):

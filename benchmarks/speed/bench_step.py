@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import math
 import resource
+import shutil
 import tempfile
 import time
 from pathlib import Path
@@ -49,8 +50,17 @@ def make_case(n: int, plugins) -> Path:
     return d
 
 
+def load_case(n: int, plugins, overrides=()):
+    """(case, plugin manager) of ``make_case``'s block; the temporary case directory is removed."""
+    d = make_case(n, plugins)
+    try:
+        return runner.load(d, list(overrides))
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+
+
 def measure(n: int, steps: int, plugins) -> dict:
-    case, pm = runner.load(make_case(n, plugins))
+    case, pm = load_case(n, plugins)
     sim = Simulation(case, pm)
     # time the after-integrate hook (where boundary plugins correct positions) separately
     boundary = [0.0]

@@ -20,9 +20,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_step import make_case  # noqa: E402
+from bench_step import load_case  # noqa: E402
 
-from sphcore.run import runner  # noqa: E402
 from sphcore.run.simulation import Simulation  # noqa: E402
 
 VARIANTS = {
@@ -34,7 +33,7 @@ VARIANTS = {
 
 
 def simulation(n, plugins, sets):
-    case, pm = runner.load(make_case(n, plugins), ["physics.modified_pressure=false", *sets])
+    case, pm = load_case(n, plugins, ["physics.modified_pressure=false", *sets])
     sim = Simulation(case, pm)
     sim.advance()  # compile and warm caches
     return sim

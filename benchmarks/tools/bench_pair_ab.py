@@ -18,8 +18,8 @@ alternate in one process see the same drift; separate runs of
 ``benchmarks/speed/bench_pairs.py`` do not.
 
 Run it first with a copy of this checkout's own file as A (``git worktree add /tmp/same
-HEAD``): that A/A run shows what the script reads when nothing differs. On 2026-11-26's
-drifting machine it read 0.85-0.92 with A always first, hence the alternating order;
+HEAD``): that A/A run shows what the script reads when nothing differs. On a machine
+whose speed drifted it read 0.85-0.92 with A always first, hence the alternating order;
 alternating, 0.96-1.06 (fastest calls) and 0.94-1.05 (median of the rounds) with another
 job on the other core, 0.91-1.05 and 0.92-0.99 without: differences within about 10 % are
 noise there (docs/speed.md).
