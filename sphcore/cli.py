@@ -94,10 +94,11 @@ def main(argv=None) -> int:
             # the same validation as `sph run` (case, memory estimate, output path, first
             # step), so that whatever check accepts, run starts
             from sphcore.run import budget
+            from sphcore.run.build import build
 
             case, pm = runner.load(args.case_dir, args.overrides, args.t_end)
             out = runner.output_path(case, args.output)
-            sim = budget.simulation(case, pm, settle=False)  # particles, sound speed, plugin set-up; no step
+            sim = build(case, pm, settle=False)  # particles, sound speed, plugin set-up; no step
             dt = budget.check_first_step(sim)
             walls = (f"{case.faces.count} wall faces ({sim.state.removed_by_walls} particles of the blocks "
                      "not created: inside a solid or closer than a radius to a face), " if case.faces.count else "")
@@ -111,15 +112,15 @@ def main(argv=None) -> int:
                 print(f"{out.resolve()}: exists and is not empty: sph run needs --overwrite (sph's files only), "
                       "--restart or --output DIR")
             return 0
-        summary = runner.run(args.case_dir, args.output, args.overrides, args.t_end, args.overwrite,
-                             args.restart, args.progress)
+        result = runner.run(args.case_dir, args.output, args.overrides, args.t_end, args.overwrite,
+                            args.restart, args.progress)
     except CaseError as e:
         return _fail(str(e), 2)
     except (OutputError, pluginhost.PluginLoadError) as e:
         return _fail(str(e), 2)
     except KeyboardInterrupt:  # Ctrl-C before the run's own handler is installed (set-up)
         return _fail("interrupted during set-up; nothing written", 128 + signal.SIGINT)
-    status = summary["status"]
+    summary, status = result.summary, result.status
     print(f"{summary['case']}: {status}: t = {summary['t']:.6g} s, {summary['steps']} steps, "
           f"{summary['n_particles']} particles, {summary['wall_time_s']:.2f} s wall, "
           f"{summary['particle_steps_per_s']:.3g} particle-steps/s, "
@@ -129,7 +130,7 @@ def main(argv=None) -> int:
         return _fail(summary["message"], 1)
     if status == "stopped":
         print(f"sph: {summary['message']}", file=sys.stderr)
-        return 128 + int(summary.get("_signum") or signal.SIGINT)
+        return 128 + int(result.signum or signal.SIGINT)
     return 0
 
 

@@ -26,7 +26,8 @@ from sphcore.physics.params import derive
 from sphcore.plugin import pluginhost
 from sphcore.plugin.context import RunContext
 from sphcore.run import runner
-from sphcore.run.simulation import build_state
+from sphcore.run.build import build_state
+from sphcore.run.state import RunState
 
 #: a valid 2D case: a 10 x 10 block of water (dx = 0.02 m) resting on the floor of a 1 m box
 TINY_CASE = """
@@ -100,7 +101,7 @@ def run_case(directory, text: str = TINY_CASE, plugins=None, tables=None, **run_
     ``directory``/output. Returns the summary (plugin figures under the plugin's name)."""
     case_dir = write_case(directory, text, plugins, tables)
     run_args.setdefault("output", Path(directory) / "output")
-    return runner.run(case_dir, quiet=True, **run_args)
+    return runner.run(case_dir, quiet=True, **run_args).summary
 
 
 def context(text: str = TINY_CASE, file="case.toml", output_dir=None, plugins=None):
@@ -112,4 +113,4 @@ def context(text: str = TINY_CASE, file="case.toml", output_dir=None, plugins=No
         raw.setdefault("plugins", {})["use"] = list(plugins)
     case = validate(raw, Path(file), pluginhost.option_schemas(file, raw))
     state = build_state(case)
-    return RunContext(case, derive(case, state), state, output_dir)
+    return RunContext(case, derive(case, state), RunState(state, case.config["time"]["t_end"]), None, output_dir)

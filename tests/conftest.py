@@ -17,6 +17,7 @@ from hypothesis import HealthCheck, settings
 
 from sphcore.jit import prepare
 from sphcore.run import runner
+from sphcore.run.build import build
 from sphcore.run.simulation import Simulation
 from sphcore.testing import write_case  # noqa: F401  (the tests import it from here)
 
@@ -30,6 +31,22 @@ settings.register_profile("dev", print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci" if os.environ.get("CI") else "dev"))
 
 prepare()  # tests call kernels directly too: the process settings a run makes first
+
+
+# Tiers: a plain `pytest` runs the fast tier (a few minutes on two cores); the long physics
+# regressions are marked `slow` and run with --all, which is what the README's test command
+# and CI run. `-m slow` runs only them.
+def pytest_addoption(parser):
+    parser.addoption("--all", action="store_true", help="run every tier: the slow physics regressions too")
+
+
+def pytest_collection_modifyitems(config, items):
+    if config.getoption("--all") or config.getoption("-m"):
+        return
+    slow = [item for item in items if item.get_closest_marker("slow")]
+    if slow:
+        config.hook.pytest_deselected(items=slow)
+        items[:] = [item for item in items if not item.get_closest_marker("slow")]
 
 # A small valid 2D case: a 10 x 10 block of fluid (dx = 0.02 m) resting in a 1 m box.
 GOOD_CASE = """
@@ -58,7 +75,7 @@ use = []
 def make_sim(case_dir, overrides=()) -> Simulation:
     """A Simulation of the case (plugins from ``[plugins] use``), with no output directory."""
     case, pm = runner.load(case_dir, overrides)
-    return Simulation(case, pm, None)
+    return build(case, pm, None)
 
 
 def run_to_end(sim: Simulation, max_steps: int = 100_000) -> list[float]:

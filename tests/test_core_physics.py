@@ -23,7 +23,7 @@ def test_spheres_without_sph_run_no_sph_kernel(tmp_path):
     case_dir = spheres(tmp_path)
     summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert summary["status"] == "completed"
-    sim = summary["_sim"]
+    sim = summary.simulation
     assert not sim.params.sph and sim.params.c0 == 0.0
     counters = summary["counters"]
     for name in SPH_KERNELS:

@@ -205,7 +205,7 @@ def test_plugin_acceleration_moves_free_particles(throwaway, tmp_path):
     case_dir = write_case(tmp_path / "free", FREE_CASE)
     summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert summary["status"] == "completed", summary["message"]
-    sim = summary["_sim"]
+    sim = summary.simulation
     assert sim.t == 0.5 and summary["steps"] == 50
     # no SPH: no neighbour search, no density, only the plugin's acceleration
     assert sim.counters["neighbour_search"] == 0 and sim.counters["continuity"] == 0

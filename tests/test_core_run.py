@@ -31,7 +31,7 @@ def test_density_bound_stops_the_run(tmp_path, capsys):
     case_dir = write_case(tmp_path / "collide", COLLIDING + "\n[checks]\nrho_max = 1.0001\n")
     summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert summary["status"] == "unstable"
-    sim = summary["_sim"]
+    sim = summary.simulation
     step, t, reason, pid = _message_parts(summary["message"])
     assert step == sim.step >= 1 and t == pytest.approx(sim.t, rel=1e-5) and sim.t < sim.t_end
     assert "density above the upper bound" in reason
@@ -151,10 +151,10 @@ def test_restart_is_bit_for_bit(tmp_path):
     case_dir = write_case(tmp_path / "case", text)
     full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
     part = runner.run(case_dir, output=tmp_path / "part", t_end=t1, quiet=True)
-    assert part["status"] == "completed" and part["_sim"].step == 15 and part["_sim"].t == t1
+    assert part["status"] == "completed" and part.simulation.step == 15 and part.simulation.t == t1
     rest = runner.run(case_dir, output=tmp_path / "part", t_end=t_end, restart=True, quiet=True)
     assert full["status"] == rest["status"] == "completed"
-    a, b = full["_sim"], rest["_sim"]
+    a, b = full.simulation, rest.simulation
     assert a.step == b.step == 40 and a.t == b.t == t_end
     assert rest["steps"] == 40 and [s["steps"] for s in rest["segments"]] == [15, 25]  # the whole run
     sa, sb = by_id(a.state), by_id(b.state)

@@ -257,7 +257,7 @@ def test_each_wall_mode_runs_end_to_end(tmp_path, mode):
     case_dir = tank_case(tmp_path / "e2e", mode)
     summary = runner.run(case_dir, t_end=0.05, quiet=True)
     assert summary["status"] == "completed", summary["message"]
-    sim = summary["_sim"]
+    sim = summary.simulation
     assert wall_clearance(sim) > 0.0
     if "ghost" in mode:
         # the floor row, the two side columns and the two floor corners: 20 + 2 * 20 + 2 * 2

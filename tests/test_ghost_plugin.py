@@ -84,7 +84,7 @@ def test_3d_box_runs_and_counts_face_edge_and_vertex_images(tmp_path):
     # per wall-wall edge (4 floor edges + 4 vertical edges) 3 x 3 x n, per floor vertex 27
     expect = 5 * 3 * n * n + 8 * 9 * n + 4 * 27
     assert summary["ghost"]["ghosts_last"] == expect
-    sim = summary["_sim"]
+    sim = summary.simulation
     assert sim.counters["extra_sources"] == sim.counters["rates"] > 0
     # a few steps of water at rest: nothing moved through a wall
     assert sim.case.planes.distances(sim.state.pos).min() > 0

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from sphcore.physics import eos
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 from sphcore.testing import write_case
 
 
@@ -78,7 +78,7 @@ def test_a_tank_at_rest_starts_in_the_discrete_equilibrium(tmp_path, h_over_dx):
     used until 2026-11-24 the deep rows drifted by up to 0.014 g and the wall columns
     differed by 0.004 g (docs/wall_pressure.md)."""
     case, pm = runner.load(write_case(tmp_path / "tank", TANK.format(h=h_over_dx)))
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     sim.integrator.rates()
     st_, prm = sim.ctx.state, sim.ctx.params
     acc = sim.integrator.acc[: st_.n] / prm.g_abs

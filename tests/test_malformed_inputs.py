@@ -277,7 +277,7 @@ def test_ctrl_c_during_set_up_is_one_line_and_writes_nothing(tmp_path, capsys, m
     def interrupted(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("sphcore.run.simulation.Simulation", interrupted)
+    monkeypatch.setattr("sphcore.run.build.Simulation", interrupted)
     before = snapshot(tmp_path)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "off")
     assert status == 128 + signal.SIGINT

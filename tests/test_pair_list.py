@@ -162,10 +162,10 @@ def test_restart_with_a_kept_list_is_bit_for_bit(tmp_path, skin, at):
     case_dir = write_case(tmp_path / "case", text)
     full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
     part = runner.run(case_dir, output=tmp_path / "part", t_end=t1, quiet=True)
-    sim = part["_sim"]
+    sim = part.simulation
     if skin > 0:
         assert sim.forces.pairs.ready(sim.state.pos)
-        builds = full["_sim"].counters["pair_list_builds"]  # the run's own, the look-ahead's not counted
+        builds = full.simulation.counters["pair_list_builds"]  # the run's own, the look-ahead's not counted
         if skin < 0.01:
             assert builds > 5
         else:  # one build: the checkpoint's positions are not those of the build
@@ -173,7 +173,7 @@ def test_restart_with_a_kept_list_is_bit_for_bit(tmp_path, skin, at):
     else:
         assert sim.forces.pairs is None
     rest = runner.run(case_dir, output=tmp_path / "part", t_end=t_end, restart=True, quiet=True)
-    a, b = full["_sim"], rest["_sim"]
+    a, b = full.simulation, rest.simulation
     assert a.step == b.step == 40
     sa, sb = by_id(a.state), by_id(b.state)
     for name in sa:

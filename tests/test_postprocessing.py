@@ -93,7 +93,7 @@ def png(path):
 
 def test_the_toolkit_is_these_scripts():
     """A script added to postprocessing/ joins the tests below; runs.py is their shared reader."""
-    assert sorted(p.name for p in SCRIPTS.glob("*.py")) == sorted(TOOLKIT + ["runs.py", "rest_stability.py"])
+    assert sorted(p.name for p in SCRIPTS.glob("*.py")) == sorted(TOOLKIT + ["runs.py"])
 
 
 @pytest.mark.parametrize("name", TOOLKIT)
@@ -103,7 +103,7 @@ def test_help_says_what_a_script_reads_and_writes(name):
     assert res.stdout.startswith(f"usage: {name} ") and "Reads " in res.stdout and "Writes " in res.stdout
 
 
-@pytest.mark.parametrize("path", STUDIES + [Path("postprocessing/rest_stability.py")], ids=str)
+@pytest.mark.parametrize("path", STUDIES, ids=str)
 def test_every_study_answers_help(path):
     """The studies import what they use (sphcore's in-process API, the gauges)."""
     res = subprocess.run([sys.executable, str(ROOT / path), "--help"], capture_output=True, text=True, check=False)

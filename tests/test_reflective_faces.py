@@ -1,6 +1,6 @@
 """Physics of the reflective boundary with finite wall faces (segments, triangles).
 
-Property tests on random domains built as in ``benchmarks/fuzz_faces.py``: box tanks with
+Property tests on random domains built as in ``benchmarks/fuzz/fuzz_faces.py``: box tanks with
 box obstacles (turned at random), non-convex tanks given by faces only (a star polygon in
 2D, a step- or L-shaped triangle mesh in 3D), tanks split by a closed plate exactly 2r
 thick and by an open sheet; steps up to 100 domain lengths, CR in [0, 1]. Then exact cases
@@ -30,9 +30,9 @@ from sphcore_plugins.reflective.collision import reflect_particles
 
 
 def _load_benchmark(name):
-    """The module benchmarks/<name>.py, registered under its name (so that fuzz_faces finds
+    """The module benchmarks/fuzz/<name>.py, registered under its name (so that fuzz_faces finds
     fuzz_domains already loaded)."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "fuzz" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # dataclasses look their module up while it runs

@@ -13,6 +13,7 @@ from sphcore.geometry.planes import Planes
 from sphcore.physics.particles import FLUID, lattice, make_block
 from sphcore.plugin import hookspecs
 from sphcore.plugin.context import RunContext
+from sphcore.run.state import RunState
 from sphcore_plugins.reflective import ReflectivePlugin
 from sphcore_plugins.reflective.collision import outside
 
@@ -41,7 +42,7 @@ def make_case(pm, table, planes):
 def make_sim(case, pos, radius):
     """A real run context of those particles (no Simulation: the hooks are called directly)."""
     state = make_block(pos, np.zeros(pos.shape[1]), 1000.0, 2 * radius, radius, FLUID)
-    return RunContext(case, None, state, plugin_name=lambda plugin: "reflective")
+    return RunContext(case, None, RunState(state, 1.0), plugin_name=lambda plugin: "reflective")
 
 
 def test_entry_point_loads_the_plugin():

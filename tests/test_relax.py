@@ -18,6 +18,7 @@ from conftest import script
 
 from sphcore import cli
 from sphcore.run import relax, runner
+from sphcore.run.build import build
 from sphcore.run.simulation import Simulation
 from sphcore.testing import write_case
 
@@ -79,8 +80,8 @@ def test_the_relaxation_ends_at_rest_changes_no_mass_and_keeps_every_particle_in
     the unrelaxed start (the hydrostatic start's), positions moved, all inside the tank's
     walls by at least the contact radius (to round-off), densities finite."""
     case_dir = write_case(tmp_path / "tank", TANK)
-    plain = Simulation(*runner.load(case_dir))
-    sim = Simulation(*runner.load(case_dir, ["relax.time=0.5"]))
+    plain = build(*runner.load(case_dir))
+    sim = build(*runner.load(case_dir, ["relax.time=0.5"]))
     a, b = plain.state, sim.state
     oa, ob = np.argsort(a.id), np.argsort(b.id)
     assert np.array_equal(a.id[oa], b.id[ob])

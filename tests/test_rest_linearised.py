@@ -17,7 +17,7 @@ import pytest
 from sphcore.case.overrides import parse_set
 from sphcore.physics.linearised import blocks, column_at_rest, rate_jacobian, state_rates, state_vector
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 
 TANK = Path(__file__).resolve().parent.parent / "cases" / "hydrostatic_tank"
 BOUNDARIES = {"ghosts": '["ghost","reflective"]', "wall model": '["reflective","wall_integral"]'}
@@ -27,7 +27,7 @@ def tank(h, boundary, *sets):
     over = ["physics.modified_pressure=false", f"kernel.h_over_dx={h}", f"plugins.use={BOUNDARIES[boundary]}",
             "domain.max=[0.4,0.6]", "blocks[0].max=[0.4,0.4]", *sets]
     case, pm = runner.load(TANK, [parse_set(s) for s in over])
-    return Simulation(case, pm)
+    return build(case, pm)
 
 
 @pytest.fixture(scope="module")
@@ -112,10 +112,10 @@ def test_the_square_lattice_under_plain_tait_pressure_is_unstable_below_h_2dx():
 
 
 def test_the_script_prints_a_stable_tank_and_its_jittered_run():
-    """postprocessing/rest_stability.py as a user runs it: a 10 x 10 tank at h = 2 dx with
+    """validation/hydrostatic_tank/rest_stability.py as a user runs it: a 10 x 10 tank at h = 2 dx with
     ghosts, no growth, the quarter wave within 1 %, and a run from a 1e-4 dx jitter that
     stays within 0.01 dx."""
-    script = Path(__file__).resolve().parent.parent / "postprocessing" / "rest_stability.py"
+    script = Path(__file__).resolve().parent.parent / "validation" / "hydrostatic_tank" / "rest_stability.py"
     out = subprocess.run([sys.executable, str(script), "--h", "2.0", "--boundary", "ghosts", "--size", "0.2", "0.2",
                           "--jitter", "1e-4", "--run", "0.5"], capture_output=True, text=True, check=True).stdout
     row, run = out.splitlines()[-2].split(), out.splitlines()[-1]
@@ -136,7 +136,7 @@ def test_the_script_relaxes_a_tank_and_runs_it_from_there():
     tank at h = 2 dx after 2 s of damped motion has come to rest (speed below 1e-3 m/s), its
     growth rate is still below 0.05 1/s, and the run's displacements, measured from the
     relaxed state, stay below 0.01 dx over 0.5 s; the worst layer is printed."""
-    script = Path(__file__).resolve().parent.parent / "postprocessing" / "rest_stability.py"
+    script = Path(__file__).resolve().parent.parent / "validation" / "hydrostatic_tank" / "rest_stability.py"
     out = subprocess.run([sys.executable, str(script), "--h", "2.0", "--boundary", "wall_model", "--size", "0.2",
                           "0.2", "--relax", "2", "--run", "0.5"], capture_output=True, text=True, check=True).stdout
     lines = out.splitlines()

@@ -363,17 +363,30 @@ def test_full_disk_at_every_write_point(dam, tmp_path, capsys, monkeypatch, poin
     assert s["status"] == "completed" and s["t"] == 0.3
 
 
-def test_checkpoint_clock():
-    from sphcore.run.resume import CheckpointClock
+def test_periodic_checkpoint_schedule():
+    from sphcore.run.activities import StepInterval, periodic
+    from sphcore.run.state import Clock
 
-    clock = CheckpointClock(0, 0.1, t0=0.25)  # simulated time only, restarted at 0.25 s
-    fired = [t for t in np.arange(0.26, 0.71, 0.01).round(2) if clock.due(float(t))]
+    def due(schedule, t, step=0):
+        return schedule.due(Clock(t=t, step=step))
+
+    clock = periodic(0, 0.1, t0=0.25)  # simulated time only, restarted at 0.25 s
+    fired = [t for t in np.arange(0.26, 0.71, 0.01).round(2) if due(clock, float(t))]
     assert fired == [0.3, 0.4, 0.5, 0.6, 0.7]
-    clock = CheckpointClock(0.05, None, t0=0.0)  # wall time only
-    assert not clock.due(1.0)
+    clock = periodic(0.05, None, t0=0.0)  # wall time only
+    assert not due(clock, 1.0)
     time.sleep(0.06)
-    assert clock.due(1.0) and not clock.due(1.0)
-    assert not any(CheckpointClock(0, None, 0.0).due(t) for t in (0.1, 1.0, 100.0))  # both off
+    assert due(clock, 1.0) and not due(clock, 1.0)
+    assert not any(due(periodic(0, None, 0.0), t) for t in (0.1, 1.0, 100.0))  # both off
+    both = periodic(0.05, 0.1, t0=0.0)  # either fires; a simulated-time firing restarts the wall interval
+    time.sleep(0.03)
+    assert due(both, 0.1) and not due(both, 0.11)
+    time.sleep(0.03)
+    assert not due(both, 0.12)  # 0.03 s since the last firing
+    time.sleep(0.03)
+    assert due(both, 0.13)
+    every3 = StepInterval(3, skip_first=True)
+    assert [k for k in range(10) if due(every3, 0.0, k)] == [3, 6, 9]
 
 
 def test_restart_ignores_tables_of_plugins_the_run_does_not_use():

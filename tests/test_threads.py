@@ -87,7 +87,7 @@ def test_changing_the_thread_count_between_steps_keeps_the_bits(tmp_path, monkey
     assert one["status"] == both["status"] == "completed"
     assert one["steps"] == both["steps"] >= 6
     assert both["threads"]["steps_per_count"][str(most)] >= 3 and both["threads"]["steps_per_count"]["1"] >= 3
-    sa, sb = by_id(one["_sim"].state), by_id(both["_sim"].state)
+    sa, sb = by_id(one.simulation.state), by_id(both.simulation.state)
     assert not np.array_equal(sa["vel"], 0.0 * sa["vel"])  # the water moved
     for name in sa:
         assert np.array_equal(sa[name], sb[name]), name
@@ -173,7 +173,7 @@ def test_a_restart_may_change_the_thread_settings_and_keeps_the_bits(tmp_path):
                       overrides=["parallel.threads=1", "parallel.adapt=false"])
     assert full["status"] == part["status"] == rest["status"] == "completed"
     assert rest["threads"]["counts"] == [1] and rest["steps"] == full["steps"] == 40
-    sa, sb = by_id(full["_sim"].state), by_id(rest["_sim"].state)
+    sa, sb = by_id(full.simulation.state), by_id(rest.simulation.state)
     for name in sa:
         assert np.array_equal(sa[name], sb[name]), name
 

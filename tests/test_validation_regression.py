@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 from sphcore_plugins.gauges.front import front_position
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
@@ -21,7 +21,7 @@ CASES = Path(__file__).resolve().parent.parent / "cases"
 
 def sim_of(case, sets, t_end):
     case_, pm = runner.load(CASES / case, [s.replace("'", '"') for s in sets], t_end=t_end)
-    return Simulation(case_, pm)
+    return build(case_, pm)
 
 
 def run(sim):
@@ -94,7 +94,7 @@ def test_hydrostatic_tank_modified_pressure_is_exact():
 def test_hydrostatic_tank_plain_tait_with_ghosts():
     """Plain Tait pressure with mirror ghosts: after 0.2 s the layer-averaged pressure below
     the top two layers is within 5% of rho g (H - y) (the 2% figure needs settling and
-    h = 1.5 dx: see benchmarks/bench_boundaries.py --accuracy) and the surface moves less
+    h = 1.5 dx: see benchmarks/speed/bench_boundaries.py --accuracy) and the surface moves less
     than 0.1 dx."""
     from sphcore_plugins.gauges.hydrostatic import layer_errors
 
@@ -146,7 +146,7 @@ def test_spheres_at_rest_50000_steps_bit_for_bit():
     the reflective boundary detects the contacts and leaves every position and velocity
     exactly as it was."""
     case_, pm = runner.load(CASES / "spheres_at_rest")
-    sim = Simulation(case_, pm)
+    sim = build(case_, pm)
     pos0, vel0 = sim.state.pos.copy(), sim.state.vel.copy()
     run(sim)
     assert sim.step == 50_000

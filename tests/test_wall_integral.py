@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 from sphcore.testing import run_case, write_case
 
 BOX = """
@@ -46,7 +46,7 @@ def box_sim(tmp_path, dim, use, h_over_dx=1.3):
     text = BOX.format(dim=dim, lo=lo, hi=hi, use=use) + f"\n[kernel]\nh_over_dx = {h_over_dx}\n"
     case_dir = write_case(tmp_path / f"box{dim}", text)
     case, pm = runner.load(case_dir)
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     sim.integrator.rates()
     return sim
 
@@ -140,7 +140,7 @@ def test_a_column_along_a_side_wall_is_held_up_as_the_interior(tmp_path, h_over_
     text = TANK.format(use='["reflective", "wall_integral"]').replace("h_over_dx = 2.0", f"h_over_dx = {h_over_dx}")
     case_dir = write_case(tmp_path / "tank", text)
     case, pm = runner.load(case_dir)
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     sim.integrator.rates()
     st, a = sim.ctx.state, sim.integrator.acc
     x, y = st.pos[:, 0], st.pos[:, 1]
@@ -166,7 +166,7 @@ def test_a_lone_particle_near_a_wall_gets_no_wall_completion(tmp_path):
         "max = [0.02, 0.02]\n[particles]", "max = [0.11, 0.04]\n[particles]")
     case_dir = write_case(tmp_path / "lone", text)
     case, pm = runner.load(case_dir)
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     st = sim.ctx.state
     assert st.n == 1 and abs(st.pos[0, 1] - 0.03) < 1e-12
     st.vel[0] = (0.0, 2.0)
@@ -211,7 +211,7 @@ def test_a_stagnation_flow_changes_the_density_only_where_the_kernel_is_truncate
     lo, hi = [0.0] * dim, [side] * dim
     text = BOX.format(dim=dim, lo=lo, hi=hi, use='["reflective"]')
     case, pm = runner.load(write_case(tmp_path / "box", text))
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     st = sim.ctx.state
     x = st.pos
     st.vel[:] = 0.0

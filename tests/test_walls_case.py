@@ -15,7 +15,7 @@ from sphcore import cli
 from sphcore.errors import CaseError
 from sphcore.geometry.faces import box
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 from sphcore.testing import write_case
 
 BASE = """
@@ -102,7 +102,7 @@ def test_blocks_are_clipped_by_walls_and_check_counts_them(tmp_path, capsys):
     # a box obstacle inside the block: particles in it or within a radius of it are not made
     text = case_text('[[domain.walls]]\nshape = "box"\nmin = [0.1, 0.0]\nmax = [0.2, 0.1]')
     case, pm = load(tmp_path, text)
-    sim = Simulation(case, pm, None)
+    sim = build(case, pm, None)
     st = sim.state
     assert st.n + st.removed_by_walls == 400
     # lattice centres 0.01, 0.03, ...; removed: closer than r = 0.01 to the box [0.1, 0.2] x
@@ -121,7 +121,7 @@ def test_a_tank_given_by_a_mesh_alone(tmp_path):
                      plugins='["reflective"]')
     case, pm = load(tmp_path, text)
     assert case.planes.count == 0 and case.faces.count == 6
-    sim = Simulation(case, pm, None)
+    sim = build(case, pm, None)
     n0 = sim.state.n
     while not sim.done():
         sim.advance()
@@ -145,7 +145,7 @@ def test_water_falls_onto_a_box_obstacle_and_stays_out_of_it(tmp_path, dim):
     text = case_text(walls, dim=dim, domain=domain, bmin=bmin, bmax=bmax, dx=0.02 if dim == 2 else 0.03,
                      t_end=0.35 if dim == 2 else 0.25)
     case, pm = load(tmp_path, text)
-    sim = Simulation(case, pm, None)
+    sim = build(case, pm, None)
     n0 = sim.state.n
     e = "z" if dim == 3 else "y"
     while not sim.done():

@@ -54,8 +54,7 @@ def main(argv=None):
     for k, (case, boundary, variant, sets, t_end) in enumerate(runs(args.tank_t_end)):
         sets = [s.replace("'", '"') for s in sets]
         s = runner.run(ROOT / "cases" / case, output=work / f"run{k}", overrides=sets, t_end=t_end,
-                       overwrite=True, quiet=True)
-        s.pop("_sim", None)
+                       overwrite=True, quiet=True).summary
         rows.append((case, boundary, variant, s))
         status = s["status"] if s["status"] == "completed" else f"{s['status']} at t = {s['t']:.3g} s"
         print(f"{case:17s} {boundary:17s} {variant:44s} {status}, {s['wall_time_s']:.1f} s", flush=True)

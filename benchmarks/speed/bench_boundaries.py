@@ -88,10 +88,10 @@ def write_case(n: int, plugins, case: str, h_over_dx: float = 1.3, dx: float = 0
 def load(case_dir: Path):
     """A Simulation of the case (no output directory); the temporary case is removed."""
     from sphcore.run import runner
-    from sphcore.run.simulation import Simulation
+    from sphcore.run.build import build
 
     try:
-        return Simulation(*runner.load(case_dir))
+        return build(*runner.load(case_dir))
     finally:
         shutil.rmtree(case_dir, ignore_errors=True)
 

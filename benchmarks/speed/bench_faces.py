@@ -32,7 +32,7 @@ import meshio
 import numpy as np
 
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 from sphcore_plugins.reflective.collision import face_arrays, reflect
 from sphcore_plugins.reflective.corner import scratch
 
@@ -91,7 +91,7 @@ def setup(tmp: Path, faces: int, dx: float, plugins='["reflective"]', sets=()):
         walls = '[[domain.walls]]\nshape = "mesh"\nfile = "sphere.stl"'
     (d / "case.toml").write_text(CASE.format(walls=walls, plugins=plugins, dx=dx))
     case, pm = runner.load(d, list(sets))
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     t0 = time.perf_counter()
     sim.advance()  # compile, warm caches (and build the wall model's face table)
     sim.first_step_s = time.perf_counter() - t0

@@ -31,7 +31,7 @@ from sphcore.case.overrides import parse_set
 from sphcore.neighbours.cellgrid import neighbour_pairs
 from sphcore.physics.equations import sph_rates
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -83,10 +83,10 @@ def staged_steps(sim, steps: int) -> tuple[float, dict]:
     sphcore.physics.forces.sph_rates = rates
     try:
         timed(sim.forces, "pair_view", "neighbour search (grid or pair list)")
-        timed(sim.integrator, "after_drift", "walls (sph_after_integrate)")
+        timed(sim.hooks, "sph_after_integrate", "walls (sph_after_integrate)")
         timed(sim, "check", "checks")
         timed(sim, "choose_dt", "time step")
-        timed(sim.integrator, "eos", "equation of state")
+        timed(sim, "update_pressure", "equation of state")
         t = time.perf_counter()
         for _ in range(steps):
             sim.advance()
@@ -106,7 +106,7 @@ def main():
                     help="override a case option, as sph run --set does")
     args = ap.parse_args()
     case, pm = runner.load(Path(args.case), [parse_set(s) for s in args.set])
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     while sim.t < args.at and not sim.done():
         sim.advance()
     per_call, pairs = frozen_pair_loop(sim, args.calls)

@@ -81,18 +81,18 @@ def _rss_mb() -> float:
 def measure_one(n: int, dim: int, plugin: str, steps: int, skin=None) -> dict:
     """In the child process: warm up on a tiny case, then time the real one."""
     from sphcore.run import runner
-    from sphcore.run.simulation import Simulation
+    from sphcore.run.build import build
 
     with tempfile.TemporaryDirectory(prefix="sphscale") as tmp:
         warm, _ = runner.load(write_case(Path(tmp) / "warm", 64, dim, PLUGINS[plugin], skin=skin))
-        sim = Simulation(warm, _)
+        sim = build(warm, _)
         for _ in range(2):
             sim.advance()
         del sim
         base = _rss_mb()
         case, pm = runner.load(write_case(Path(tmp) / "real", n, dim, PLUGINS[plugin], skin=skin))
         t0 = time.perf_counter()
-        sim = Simulation(case, pm)
+        sim = build(case, pm)
         sim.advance()
         setup = time.perf_counter() - t0
         chunks = [steps // CHUNKS + (k < steps % CHUNKS) for k in range(CHUNKS)]

@@ -36,10 +36,8 @@ import numba  # noqa: E402
 mark("import numba")
 from numba.core import dispatcher  # noqa: E402
 
-from sphcore.run import (
-    budget,  # noqa: E402
-    runner,
-)
+from sphcore.run import budget, runner  # noqa: E402
+from sphcore.run.build import build  # noqa: E402
 
 mark("import sphcore")
 
@@ -67,7 +65,7 @@ def main():
     dispatcher.Dispatcher._compile_for_args = _timed_first_call
     case, pm = runner.load(Path(a.case), [])
     mark("load the case and its plugins")
-    sim = budget.simulation(case, pm)
+    sim = build(case, pm)
     mark("set up the simulation")
     budget.check_first_step(sim)
     mark("first-step check (sph run's)")

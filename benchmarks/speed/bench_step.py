@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 
 CASE = """
 [case]
@@ -61,17 +61,17 @@ def load_case(n: int, plugins, overrides=()):
 
 def measure(n: int, steps: int, plugins) -> dict:
     case, pm = load_case(n, plugins)
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     # time the after-integrate hook (where boundary plugins correct positions) separately
     boundary = [0.0]
-    inner = sim.integrator.after_drift
+    inner = sim.hooks.sph_after_integrate
 
-    def timed(*args):
+    def timed(**kwargs):
         t = time.perf_counter()
-        inner(*args)
+        inner(**kwargs)
         boundary[0] += time.perf_counter() - t
 
-    sim.integrator.after_drift = timed
+    sim.hooks.sph_after_integrate = timed
     sim.advance()  # compile and warm caches
     boundary[0] = 0.0
     t0 = time.perf_counter()

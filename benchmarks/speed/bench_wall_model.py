@@ -22,7 +22,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_step import load_case  # noqa: E402
 
-from sphcore.run.simulation import Simulation  # noqa: E402
+from sphcore.run.build import build  # noqa: E402
 
 VARIANTS = {
     "reflective": (["reflective"], []),
@@ -34,7 +34,7 @@ VARIANTS = {
 
 def simulation(n, plugins, sets):
     case, pm = load_case(n, plugins, ["physics.modified_pressure=false", *sets])
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     sim.advance()  # compile and warm caches
     return sim
 

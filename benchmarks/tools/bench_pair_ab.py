@@ -46,7 +46,7 @@ import numpy as np
 import sphcore.physics.equations as B
 from sphcore.case.overrides import parse_set
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -74,7 +74,7 @@ def main():
         sys.exit(f"{a.other} is this checkout's own file: give a copy in another checkout (git worktree add)")
     A = load_other(a.other)
     case, pm = runner.load(Path(a.case), [parse_set(s) for s in a.set])
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     while sim.t < a.at and not sim.done():
         sim.advance()
     f, st = sim.forces, sim.state

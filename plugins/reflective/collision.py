@@ -59,7 +59,7 @@ from .facecontact import contact_normal, earliest_face, empty_grid, near_any_fac
 #: side of the face grid's cells in particle radii. A step's box (2 r + the step) spans at
 #: most three cells per axis for steps up to 2 r; cells of 2 r list few faces each: with a
 #: 10^4-triangle mesh the kernel took 6 % of a 3D step, against 17 % with cells of 4 r
-#: (benchmarks/bench_faces.py)
+#: (benchmarks/speed/bench_faces.py)
 CELL_RADII = 2.0
 
 #: relative contact allowance: a plane collides only when d < r - TOL_REL * r

@@ -3,7 +3,7 @@
 The exact terms of a particle near a mesh (:func:`.facewalls.point_terms`) integrate every
 face within its support: about 170 triangles for a particle next to a sphere of 10^4
 triangles, 50 us a particle, and the wall model took 72% of a 3D step at 10^5 particles
-(``benchmarks/bench_faces.py --wall-model``). Since s, G and T g are functions of position
+(``benchmarks/speed/bench_faces.py --wall-model``). Since s, G and T g are functions of position
 alone, they are computed once at the nodes of a grid of spacing ``spacing`` over the faces'
 box grown by 2h, and each step interpolates them (multilinear) at the particles. The
 faces' projector onto their directions (``WallTerms.normals``) is taken from the nearest

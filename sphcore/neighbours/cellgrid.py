@@ -21,7 +21,7 @@ walks the neighbours through it:
 Why cells of side 2h: cells of side h (reach 2) hold 5^dim h^dim around a particle
 instead of 6^dim, 42% fewer candidate pairs in 3D, but walking four (eight) times as many,
 nearly empty cells cost more than the candidates saved: measured with
-``benchmarks/bench_scale.py``, one thread, 2D 10^5 particles 3.76 -> 2.09 million
+``benchmarks/speed/bench_scale.py``, one thread, 2D 10^5 particles 3.76 -> 2.09 million
 particle-steps/s, 3D 10^5 0.93 -> 0.64 million, and the grid build 47 -> 333 us for 2,592
 particles. ``reach`` stays a parameter (tested for 1 to 3).
 
@@ -155,7 +155,7 @@ def forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf):
     compaction over positions contiguous in memory (the index is always stored, the count
     advances only when the test passes), and the pair loop then runs over partners only
     (measured change by change in docs/speed.md, "The pair loop";
-    ``benchmarks/bench_pairs.py`` prints today's figure).
+    ``benchmarks/speed/bench_pairs.py`` prints today's figure).
     """
     dim = spos.shape[1]
     p0 = spos[k, 0]
@@ -192,7 +192,7 @@ def listed_pairs(k, spos, order, pair_start, pair_cand, r2max, buf):
     Lists are kept only for runs without plugin sources, so no pair of two sources occurs.
     The distance test is written out here as in :func:`forward_pairs`: one inline helper
     for both made this loop 20 % slower (PySPH's dam break, one thread, frozen state: 0.264
-    -> 0.313-0.318 ms a call, ``benchmarks/bench_pairs.py``)."""
+    -> 0.313-0.318 ms a call, ``benchmarks/speed/bench_pairs.py``)."""
     dim = spos.shape[1]
     p0 = spos[k, 0]
     p1 = spos[k, 1]

@@ -316,3 +316,15 @@ def _build(dim: int, walls: bool, three_pass: bool | None = None):
 
 
 _RATES = {(dim, walls): _build(dim, walls) for dim in (2, 3) for walls in (False, True)}
+
+
+def compiled_on_disk(dim: int) -> bool:
+    """Whether numba's on-disk cache holds the pair loop of a ``dim``-dimensional run (else
+    the first force evaluation compiles it), wherever numba may keep it
+    (:func:`sphcore.jit.cache.cache_dirs`)."""
+    from pathlib import Path
+
+    from sphcore.jit.cache import cache_dirs
+
+    return any(any(d.glob(f"equations._sph_rates_{dim}d*.nbi")) for d in cache_dirs([Path(__file__).resolve()])
+               if d.is_dir())

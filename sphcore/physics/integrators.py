@@ -1,5 +1,6 @@
 """Time integrators. Each step: free motion (no walls), then the ``sph_after_integrate``
-hook (where the reflective boundary corrects positions and velocities), then rates.
+hook (where the reflective boundary corrects positions and velocities) and the equation of
+state, then the rates at the new state (the simulation calls the stages in that order).
 
 - ``euler``: explicit Euler as in the paper: x1 = x0 + dt v0, v1 = v0 + dt a0, rho1 = rho0 + dt drho0;
   first order; rates are evaluated at the start of each step.
@@ -28,7 +29,7 @@ from sphcore.jit.parallel import by_size
 # Element-wise updates, compiled serial and parallel (:class:`sphcore.jit.parallel.by_size`,
 # parallel from PARALLEL_MIN particles): each particle's update is independent of the
 # others', so both builds give the same bits. 2D still water at 10^5 particles, two
-# threads (`benchmarks/bench_pairs.py`): the step outside the timed stages, mostly these
+# threads (`benchmarks/speed/bench_pairs.py`): the step outside the timed stages, mostly these
 # updates, 2.3-2.7 -> 1.06-1.09 ms of an 11-13 ms step.
 
 
@@ -60,39 +61,51 @@ def _correct(vel, acc_new, acc_old, rho, drho_new, drho_old, half_dt, evolve_den
 
 
 class _Scheme:
-    """What both schemes share: the rates of the current state (``acc``, ``drho``, computed
-    once and reused while ``fresh``), the scratch arrays, and the free-motion stage that
-    ends in the boundary correction.
+    """What both schemes share: the free-motion stage and the scratch arrays.
 
-    A scheme is built with the particles, the force evaluation (``forces.evaluate(acc,
-    drho)``), ``after_drift(pos0, pos, vel, acc, dt)`` (the walls) and ``eos()`` (pressure
-    from density); it calls nothing else.
+    A scheme is built with the run state (``run.particles`` and ``run.rates``, see
+    :class:`sphcore.run.state.RunState`) and one rates function, ``rates_fn(acc, drho)``,
+    which writes the rates of the current particles into the arrays it is given; it calls
+    nothing else. A step is :meth:`free_motion` (the drift and the predicted kick), then the
+    caller's wall correction and equation of state, then :meth:`finish` (the rates at the
+    new state and, for the leapfrog, the corrector). :meth:`finish` returns whether the
+    density changed again, so that the caller applies the equation of state once more.
     """
 
     name = ""
     half_kick = 0.0  # weight of dt/2 * a in the drift: 0 for Euler, 1 for the leapfrog
 
-    def __init__(self, state, forces, after_drift, eos, evolves_density: bool):
-        self.state, self.forces, self.after_drift, self.eos = state, forces, after_drift, eos
+    def __init__(self, run, rates_fn, evolves_density: bool):
+        self.run, self.rates_fn = run, rates_fn
         self.evolves_density = evolves_density
-        self.fresh = False  # are acc/drho the rates of the current state?
-        self.acc = np.zeros((0, state.dim))
-        self.drho = np.zeros(0)
-        self.pos0 = np.zeros((0, state.dim))
+        self.pos0 = np.zeros((0, 0))  # allocated by resize()
+        self._drho_spare = np.zeros(0)
         self.resize()
 
     # -- arrays -----------------------------------------------------------------------
 
+    @property
+    def acc(self) -> np.ndarray:
+        """The accelerations of the run state (m/s^2), read only."""
+        return self.run.rates.acc
+
+    @property
+    def drho(self) -> np.ndarray:
+        """The density rates of the run state (kg/m^3/s), read only."""
+        return self.run.rates.drho
+
+    @property
+    def fresh(self) -> bool:
+        return self.run.rates.fresh
+
     def resize(self):
         """(Re)allocate the per-particle arrays when the particle count changed (set-up)."""
-        n, dim = self.state.n, self.state.dim
-        if self.acc.shape[0] != n:
-            self.acc = np.zeros((n, dim))
-            self.drho = np.zeros(n)
+        n, dim = self.run.particles.n, self.run.particles.dim
+        self.run.fit_rates()
+        if self.pos0.shape != (n, dim):
             self.pos0 = np.zeros((n, dim))
             self._drho_spare = np.zeros(n)
             self._extra_arrays(n, dim)
-            self.fresh = False
 
     def _extra_arrays(self, n, dim):
         pass
@@ -100,41 +113,31 @@ class _Scheme:
     def permute(self, order):
         """Follow a reordering of the particles (the rates move with them): gathered into
         the scratch arrays, which then swap roles (no allocation)."""
-        np.take(self.acc, order, axis=0, out=self.pos0, mode="clip")  # pos0: rewritten by every drift
-        self.acc, self.pos0 = self.pos0, self.acc
-        np.take(self.drho, order, out=self._drho_spare, mode="clip")  # "raise" would buffer
-        self.drho, self._drho_spare = self._drho_spare, self.drho
+        r = self.run.rates
+        np.take(r.acc, order, axis=0, out=self.pos0, mode="clip")  # pos0: rewritten by every drift
+        r.acc, self.pos0 = self.pos0, r.acc
+        np.take(r.drho, order, out=self._drho_spare, mode="clip")  # "raise" would buffer
+        r.drho, self._drho_spare = self._drho_spare, r.drho
 
     def invalidate(self):
         """The state changed outside a step (density filter): recompute rates first."""
-        self.fresh = False
+        self.run.rates.fresh = False
 
     def rates(self):
-        """Make ``acc``/``drho`` the rates of the current state."""
-        if not self.fresh:
-            self.forces.evaluate(self.acc, self.drho)
-            self.fresh = True
-
-    def checkpoint(self) -> dict:
-        """Arrays and flags a restart needs to continue bit for bit."""
-        return {"acc": self.acc, "drho": self.drho, "fresh": self.fresh}
-
-    def restore(self, saved: dict):
-        self.resize()
-        self.acc[:] = saved["acc"]
-        if "drho" in saved and saved["drho"].shape == self.drho.shape:
-            self.drho[:] = saved["drho"]
-        self.fresh = bool(saved["fresh"])
+        """Make the run state's rates those of the current particles."""
+        r = self.run.rates
+        if not r.fresh:
+            self.rates_fn(r.acc, r.drho)
+            r.fresh = True
 
     # -- stages -----------------------------------------------------------------------
 
     def free_motion(self, dt):
-        """x += dt (v + half_kick dt/2 a), v += dt a, rho += dt D; then walls and EOS."""
-        st = self.state
+        """x += dt (v + half_kick dt/2 a), v += dt a, rho += dt D, with the rates of the
+        step's start (``pos0`` keeps the positions before it, for the walls)."""
+        st, r = self.run.particles, self.run.rates
         self.rates()
-        _drift_kick(self.pos0, st.pos, st.vel, self.acc, st.rho, self.drho, dt, self.half_kick, self.evolves_density)
-        self.after_drift(self.pos0, st.pos, st.vel, self.acc, dt)
-        self.eos()
+        _drift_kick(self.pos0, st.pos, st.vel, r.acc, st.rho, r.drho, dt, self.half_kick, self.evolves_density)
 
 
 class Euler(_Scheme):
@@ -142,9 +145,9 @@ class Euler(_Scheme):
 
     name = "euler"
 
-    def step(self, dt):
-        self.free_motion(dt)
-        self.fresh = False
+    def finish(self, dt) -> bool:
+        self.run.rates.fresh = False
+        return False
 
 
 class Leapfrog(_Scheme):
@@ -157,19 +160,17 @@ class Leapfrog(_Scheme):
         self.acc_old = np.zeros((n, dim))
         self.drho_old = np.zeros(n)
 
-    def step(self, dt):
-        st = self.state
-        self.free_motion(dt)
+    def finish(self, dt) -> bool:
+        st, r = self.run.particles, self.run.rates
         # the rates of the step's start become the old ones by swapping the arrays (the
         # evaluation overwrites every row), not by copying them
-        self.acc, self.acc_old = self.acc_old, self.acc
+        r.acc, self.acc_old = self.acc_old, r.acc
         if self.evolves_density:
-            self.drho, self.drho_old = self.drho_old, self.drho
-        self.forces.evaluate(self.acc, self.drho)
-        _correct(st.vel, self.acc, self.acc_old, st.rho, self.drho, self.drho_old, 0.5 * dt, self.evolves_density)
-        if self.evolves_density:
-            self.eos()
-        self.fresh = True
+            r.drho, self.drho_old = self.drho_old, r.drho
+        self.rates_fn(r.acc, r.drho)
+        _correct(st.vel, r.acc, self.acc_old, st.rho, r.drho, self.drho_old, 0.5 * dt, self.evolves_density)
+        r.fresh = True
+        return self.evolves_density
 
 
 SCHEMES = {"euler": Euler, "leapfrog": Leapfrog}

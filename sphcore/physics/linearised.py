@@ -21,7 +21,7 @@ gravity wave at a free surface) damped by the viscosity; Re lambda > 0 is an ins
 which grows from any disturbance, round-off included. A lattice that sits exactly on an
 unstable equilibrium stays there only while nothing breaks its symmetry, which is why
 stability is read here rather than from a run. Known answers a scheme must give (used by
-``postprocessing/rest_stability.py`` and ``tests/test_rest_linearised.py``): a column of
+``validation/hydrostatic_tank/rest_stability.py`` and ``tests/test_rest_linearised.py``): a column of
 depth H over a rigid floor rings at omega = pi c0 / (2 H) (quarter wave, p = 0 at the free
 surface); the first sloshing mode of a tank of width L has omega^2 = g k tanh(k H), k = pi / L
 (linear water waves, e.g. Lamb, Hydrodynamics, art. 227).

@@ -12,7 +12,7 @@ walks a particle's partners with them.
 Both compute each term with the same arithmetic (:func:`pair_terms`) and add them in the
 same order: the same bits. Which pays depends on how many partners a particle has: each
 pair is evaluated once, so a particle has ~10 partners in 2D at h = 1.3 dx and ~37 in 3D.
-On a frozen state, one thread (``benchmarks/bench_pair_ab.py`` against the fused loop of
+On a frozen state, one thread (``benchmarks/tools/bench_pair_ab.py`` against the fused loop of
 main, rounds alternating; fastest calls / median of rounds; 2026-11-26, a quiet moment of
 the 2-vCPU Xeon): three passes took 0.77-0.83 / 0.81-0.84 of the fused loop's time in 3D
 (the seed's 3D dam break at t = 0.01 s, 16,384 particles, two runs of 10 rounds); this

@@ -9,7 +9,8 @@ Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
 ``ctx.params``        :class:`sphcore.physics.params.Params`, every physical and numerical
                       constant of the run (h, support, kernel_id, rho0, c0, gamma, tait_b,
                       gravity, up, ...), frozen; also an argument to numba kernels.
-``ctx.walls``         :class:`sphcore.geometry.planes.Planes`, the wall planes of the case.
+``ctx.planes``        :class:`sphcore.geometry.planes.Planes`, the wall planes of the case
+                      (also ``ctx.walls``, the name earlier versions used).
 ``ctx.case``          :class:`sphcore.case.model.Case`, the validated case: ``ctx.case.config[table]``
                       holds a plugin's options with defaults filled in.
 ``ctx.t``             simulated time (s) at the start of the next step.
@@ -32,8 +33,9 @@ Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
                       strings, lists or numpy arrays); restored before ``sph_setup``.
 ====================  ===================================================================
 
-The context is built by :class:`sphcore.run.simulation.Simulation`; plugins import its type
-from :mod:`sphcore.api`.
+The context is a view of the run state (:class:`sphcore.run.state.RunState`, ``ctx.run``),
+built by :class:`sphcore.run.simulation.Simulation`; plugins import its type from
+:mod:`sphcore.api`.
 """
 
 from __future__ import annotations
@@ -45,46 +47,89 @@ import numpy as np
 
 
 class RunContext:
-    """See the module docstring for every attribute."""
+    """See the module docstring for every attribute. ``run`` is the run state
+    (:class:`sphcore.run.state.RunState`): the context is a view of it, so that what a
+    plugin reads or changes is always the run's own. ``pressure`` owns the force pressure
+    (:class:`sphcore.physics.forces.PressureField`; None: the physical pressure)."""
 
-    def __init__(self, case, params, state, output_dir: Path | None = None, restarting: bool = False,
+    def __init__(self, case, params, run, pressure=None, output_dir: Path | None = None, restarting: bool = False,
                  plugin_name=None):
         self.case = case
         self.params = params
-        self.state = state
-        self.walls = case.planes
+        self.run = run
+        self.planes = case.planes
         self.output_dir = output_dir
         self.restarting = restarting
-        self.t, self.step, self.dt = 0.0, 0, 0.0
-        self.t_end = case.config["time"]["t_end"]
-        self.counters: Counter = Counter()
-        self._stats: dict[str, dict] = {}
-        self._kept: dict[str, dict] = {}
+        self._pressure = pressure
         self._plugin_name = plugin_name or (lambda plugin: type(plugin).__name__)
         self._names: dict[int, tuple] = {}  # id(plugin) -> (plugin, name): see _name_of
-        self._pressure = None  # the force pressure owner (sphcore.physics.forces.PressureField)
-        self._rates = None  # the integrator (owns the accelerations)
 
-    # -- fields owned elsewhere -----------------------------------------------------
+    # -- the run state, by name ---------------------------------------------------------
+
+    @property
+    def state(self):
+        return self.run.particles
+
+    @property
+    def walls(self):
+        """The wall planes (the same object as :attr:`planes`; kept for plugins written
+        against earlier versions)."""
+        return self.planes
+
+    @property
+    def t(self) -> float:
+        return self.run.clock.t
+
+    @t.setter
+    def t(self, value: float):
+        self.run.clock.t = value
+
+    @property
+    def step(self) -> int:
+        return self.run.clock.step
+
+    @step.setter
+    def step(self, value: int):
+        self.run.clock.step = value
+
+    @property
+    def dt(self) -> float:
+        return self.run.clock.dt
+
+    @dt.setter
+    def dt(self, value: float):
+        self.run.clock.dt = value
+
+    @property
+    def t_end(self) -> float:
+        return self.run.clock.t_end
+
+    @t_end.setter
+    def t_end(self, value: float):
+        self.run.clock.t_end = value
+
+    @property
+    def counters(self) -> Counter:
+        return self.run.counters
 
     @property
     def force_pressure(self) -> np.ndarray:
-        return self._pressure.force_pressure(self.state)
+        return self.state.p if self._pressure is None else self._pressure.force_pressure(self.state)
 
     @property
     def acc(self) -> np.ndarray:
-        return self._rates.acc
+        return self.run.rates.acc
 
     # -- per-plugin namespaces --------------------------------------------------------
 
     def stats(self, plugin) -> dict:
         """The figures of ``plugin`` (an instance, or its registered name): in the summary
         under that name, and in every checkpoint."""
-        return self._stats.setdefault(plugin if isinstance(plugin, str) else self._name_of(plugin), {})
+        return self.run.stats.setdefault(plugin if isinstance(plugin, str) else self._name_of(plugin), {})
 
     def kept(self, plugin) -> dict:
         """State of ``plugin`` that a checkpoint keeps and a restart restores."""
-        return self._kept.setdefault(plugin if isinstance(plugin, str) else self._name_of(plugin), {})
+        return self.run.kept.setdefault(plugin if isinstance(plugin, str) else self._name_of(plugin), {})
 
     def _name_of(self, plugin) -> str:
         """The registered name of ``plugin``, looked up once per plugin (pluggy's lookup walks
@@ -97,4 +142,4 @@ class RunContext:
 
     def all_stats(self) -> dict[str, dict]:
         """Every plugin's figures, by plugin name (only those that have any)."""
-        return {name: dict(s) for name, s in self._stats.items() if s}
+        return {name: dict(s) for name, s in self.run.stats.items() if s}

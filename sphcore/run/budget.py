@@ -3,14 +3,13 @@
 when it cannot advance the clock or would need an absurd number of steps).
 
 ``sph check`` and ``sph run`` both call :func:`check_scales` and :func:`check_memory` (in
-``runner.load``), build the particles through :func:`simulation` and call
+``runner.load``), build the simulation (:func:`sphcore.run.build.build`) and call
 :func:`check_first_step` (before the output directory is touched), so whatever ``check``
 accepts, ``run`` starts.
 """
 
 from __future__ import annotations
 
-import copy
 import math
 import os
 
@@ -83,19 +82,6 @@ def check_scales(case) -> None:
                         "a reference density nearer 1 (or a smaller eos.gamma)")
 
 
-def simulation(case, pm, output_dir=None, restarting=False, settle=True):
-    """``Simulation(...)``, with arithmetic that fails while setting up from the case's
-    values (an overflow, a division by zero) reported as a CaseError, not a traceback;
-    ``settle=False`` leaves out the relaxed start (``[relax]``), which only a run does."""
-    from sphcore.run.simulation import Simulation
-
-    try:
-        return Simulation(case, pm, output_dir, restarting=restarting, settle=settle)
-    except ArithmeticError as e:
-        raise CaseError(case.file, "-", f"setting up the particles failed on {type(e).__name__} ({e}): expected "
-                        "values of a physical size") from None
-
-
 def check_memory(case) -> None:
     """Refuse a case that needs more memory than the machine has (or particles.memory_limit_gib)."""
     n, need = estimate(case)
@@ -117,13 +103,11 @@ def check_memory(case) -> None:
 
 def _rates_at_start(sim) -> tuple[float, float]:
     """(first step's size (s) as the run chooses it, largest |a| (m/s^2)): the rates at the
-    initial state, then ``choose_dt``. Everything the evaluation touches is put back afterwards (particle
-    arrays in place, work arrays, statistics, counters, the pair list), so the run that follows takes
-    exactly the steps it would have taken without this look-ahead."""
-    st, ctx, integ = sim.state, sim.ctx, sim.integrator
-    saved_state = [(a, a.copy()) for _, a in st.arrays()]
-    saved_work = [(a, a.copy()) for a in (integ.acc, integ.drho, ctx.force_pressure)]
-    stats, kept, counters, fresh = copy.deepcopy(ctx._stats), copy.deepcopy(ctx._kept), ctx.counters.copy(), integ.fresh
+    initial state, then ``choose_dt``. The run state is put back afterwards
+    (:meth:`sphcore.run.simulation.Simulation.snapshot`), so the run that follows takes exactly
+    the steps it would have taken without this look-ahead."""
+    snap = sim.snapshot()
+    integ = sim.integrator
     try:
         integ.invalidate()
         integ.rates()
@@ -132,27 +116,7 @@ def _rates_at_start(sim) -> tuple[float, float]:
                             "viscosity and density_diffusion values of a physical size")
         return sim.choose_dt(), float(np.sqrt(np.max(np.einsum("ij,ij->i", integ.acc, integ.acc), initial=0.0)))
     finally:
-        for a, copy_ in saved_state + saved_work:
-            a[...] = copy_
-        for live, saved in ((ctx._stats, stats), (ctx._kept, kept)):  # in place: plugins hold these dicts
-            for name in list(live):
-                if name not in saved:
-                    del live[name]
-            for name, values in saved.items():
-                target = live.setdefault(name, {})
-                for key in list(target):
-                    if key not in values:
-                        del target[key]
-                for key, value in values.items():
-                    if isinstance(target.get(key), list) and isinstance(value, list):
-                        target[key][:] = value  # a series a plugin appends to
-                    else:
-                        target[key] = value
-        ctx.counters.clear()
-        ctx.counters.update(counters)
-        integ.fresh = fresh
-        if sim.forces.pairs is not None:
-            sim.forces.pairs.invalidate()  # the run builds its own pair list, as without this look-ahead
+        sim.restore(snap)
 
 
 def _binding_limit(sim, amax: float) -> str:

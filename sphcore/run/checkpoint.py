@@ -1,8 +1,11 @@
 """Checkpoints: everything a run needs to continue bit-for-bit, in one ``.npz``.
 
-Saved: every particle array (float64 as is), the rates of the current state (the leapfrog
-reuses them at the start of the next step), t, step, dt and the run's statistics. The file
-is written to a temporary name and renamed, so a crash mid-write keeps the previous one.
+Saved: the run state (:meth:`sphcore.run.state.RunState.payload`: every particle array
+(float64 as is), the rates of the current state, which the leapfrog reuses at the start of
+the next step, the pair-list anchor, t, step, dt, the plugins' figures and kept state), the
+validated case and the run's identity. The file is written to a temporary name and renamed,
+so a crash mid-write keeps the previous one; a restart reads it back with :func:`read` and
+:meth:`sphcore.run.state.RunState.load_payload`.
 """
 
 from __future__ import annotations
@@ -15,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from sphcore.errors import CaseError, OutputError
-from sphcore.physics.particles import ParticleState
 from sphcore.run import resume
 
 NAME = "checkpoint.npz"
@@ -26,26 +28,8 @@ def save(sim, directory: Path, extra: dict | None = None) -> Path:
     :mod:`sphcore.run.resume`) goes into its metadata."""
     path = Path(directory) / NAME
     tmp = path.with_suffix(".tmp.npz")
-    ctx = sim.ctx
-    arrays = {f"state_{name}": a for name, a in ctx.state.arrays()}
-    rates = sim.integrator.checkpoint()
-    arrays["acc"] = rates["acc"]
-    arrays["drho"] = rates["drho"]
-    pairs = sim.forces.pairs
-    if pairs is not None and pairs.checkpoint() is not None:
-        arrays["pair_list_positions"] = pairs.checkpoint()  # the lists are rebuilt from these
-    kept = {}
-    for plugin, values in ctx._kept.items():
-        kept[plugin] = {}
-        for key, value in values.items():
-            if isinstance(value, np.ndarray):
-                arrays[f"kept_{plugin}_{key}"] = value
-                kept[plugin][key] = {"__array__": f"kept_{plugin}_{key}"}
-            else:
-                kept[plugin][key] = value
-    meta = {"t": ctx.t, "step": ctx.step, "dt": ctx.dt, "stats": ctx._stats, "kept": kept,
-            "counters": dict(ctx.counters), "fresh": bool(rates["fresh"]),
-            "config": resume.config_json(sim.case.config)}
+    meta, arrays = sim.run.payload()
+    meta["config"] = resume.config_json(sim.case.config)
     meta.update(extra or {})
     try:
         with open(tmp, "wb") as f:
@@ -83,25 +67,3 @@ def read_meta(directory: Path) -> dict:
             return json.loads(str(z["meta"]))
     except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
         raise CaseError(path, "--restart", f"not a readable checkpoint ({e})") from None
-
-
-def restore_state(ctx, meta: dict, arrays: dict) -> None:
-    """Put the checkpoint's particles, clock, statistics and the plugins' kept state into
-    the run context ``ctx`` (before set-up)."""
-    names = [name for name, _ in ctx.state.arrays()]
-    ctx.state = ParticleState(**{name: arrays[f"state_{name}"] for name in names})
-    ctx.t, ctx.step, ctx.dt = meta["t"], meta["step"], meta["dt"]
-    for plugin, values in meta["stats"].items():
-        ctx.stats(plugin).update(values)
-    for plugin, values in meta.get("kept", {}).items():
-        ctx.kept(plugin).update({k: arrays[v["__array__"]] if isinstance(v, dict) and "__array__" in v else v
-                                 for k, v in values.items()})
-    ctx.counters.update(meta["counters"])
-
-
-def restore_rates(sim, meta: dict, arrays: dict) -> None:
-    """Put the checkpoint's rates into the integrator (after allocation), so the leapfrog
-    continues exactly as the uninterrupted run would."""
-    sim.integrator.restore({"acc": arrays["acc"], "drho": arrays.get("drho", np.zeros(0)), "fresh": meta["fresh"]})
-    if sim.forces.pairs is not None and "pair_list_positions" in arrays:
-        sim.forces.pairs.restore(arrays["pair_list_positions"])

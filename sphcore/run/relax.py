@@ -4,7 +4,7 @@ A tank filled on a square lattice with the exact hydrostatic pressure
 (``physics.hydrostatic_init``) is in equilibrium in the continuum, not in the SPH sums: the
 layers under the free surface start out of balance (their supports are cut by the surface),
 and under plain Tait pressure the square lattice itself is an unstable equilibrium for most
-smoothing lengths (``postprocessing/rest_stability.py``: exp(2.7 t) at h = 1.5 dx with
+smoothing lengths (``validation/hydrostatic_tank/rest_stability.py``: exp(2.7 t) at h = 1.5 dx with
 ghosts), so that a run from it moves by a few particle spacings in seconds whatever the
 walls. Dynamic relaxation (Day 1965, The Engineer 219, 218-221; Underwood 1983 in Belytschko
 & Hughes (eds.), Computational Methods for Transient Analysis) finds the static equilibrium
@@ -64,21 +64,18 @@ def check(case) -> None:
                             "ends at rest and would discard the block's velocity")
 
 
-def settle(case, state) -> dict:
+def settle(case, state, simulation) -> dict:
     """Relax ``state`` (the case's particles as built, hydrostatic start applied) in place
-    (module docstring); returns the figures for the summary."""
-    from sphcore.plugin import pluginhost
-    from sphcore.run.simulation import Simulation  # the relaxation runs a Simulation of its own
-
+    (module docstring); returns the figures for the summary. ``simulation(case)`` makes the
+    relaxation's own run of the case (:func:`sphcore.run.build.build` with plugins of its
+    own and ``relaxing=True``)."""
     cfg = case.config["relax"]
     clock = time.perf_counter()
-    pm = pluginhost.make_manager(case.config["plugins"]["use"], case.file)
-    pluginhost.configure(pm, case)
     threads_before = numba.get_num_threads()
     if case.config["parallel"]["threads"]:
         numba.set_num_threads(min(threads_before, case.config["parallel"]["threads"]))
     try:
-        sim = Simulation(case, pm, relaxing=True)
+        sim = simulation(case)
         st, dx = sim.state, case.dx
         sim.ctx.t_end = cfg["time"]
         ids0 = np.sort(st.id)

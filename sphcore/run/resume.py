@@ -1,5 +1,5 @@
-"""Continuing runs: when to write a periodic checkpoint, what a checkpoint must match for
-``--restart`` to continue it, and the run's history across segments (for the summary).
+"""Continuing runs: what a checkpoint must match for ``--restart`` to continue it, and the
+run's history across segments (for the summary).
 
 A restart continues the same run only: the case after ``--set`` (except the keys in
 :data:`MAY_DIFFER` and plugin options declared with ``Option(restart=True)``), the sphcore
@@ -11,7 +11,6 @@ Otherwise frames of another run would be appended to the same files; the restart
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 from sphcore import __version__
@@ -22,27 +21,6 @@ from sphcore.errors import CaseError
 MAY_DIFFER = {"time.t_end", "output.progress", "output.log_interval_s", "output.checkpoint_every_s",
               "output.checkpoint_every_dt", "output.dir", "particles.memory_limit_gib", "time.max_steps",
               "parallel.threads", "parallel.adapt"}  # the same bits for any thread count
-
-
-class CheckpointClock:
-    """Decides after each step whether a periodic checkpoint is due: every ``every_s`` of
-    wall time and/or every ``every_dt`` of simulated time (None or 0 switches one off)."""
-
-    def __init__(self, every_s, every_dt, t0: float):
-        self.every_s = every_s or None
-        self.every_dt = every_dt or None
-        self.last_wall = time.monotonic()
-        self.next_t = None if self.every_dt is None else (int(t0 / self.every_dt) + 1) * self.every_dt
-
-    def due(self, t: float) -> bool:
-        now = time.monotonic()
-        fire = self.every_s is not None and now - self.last_wall >= self.every_s
-        if self.next_t is not None and t >= self.next_t * (1 - 1e-12):
-            fire = True
-            self.next_t = (int(t / self.every_dt * (1 + 1e-12)) + 1) * self.every_dt
-        if fire:
-            self.last_wall = now
-        return fire
 
 
 def _flat(config: dict, prefix="") -> dict:

@@ -1,6 +1,9 @@
-"""Run a case directory end to end: load, prepare the output directory, step, summarise.
+"""Run a case directory end to end: load, build, prepare the output directory, step, summarise.
 
-Used by the CLI (``sph run``) and by sweeps; returns the summary as a dict.
+    run(case_dir) = load -> build (sphcore.run.build) -> first-step check -> output directory
+                    -> steps, with the activities on their schedules -> summary.json -> RunResult
+
+Used by the CLI (``sph run``) and by sweeps; returns a :class:`RunResult`.
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ import signal
 import sys
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numba
@@ -22,9 +26,52 @@ from sphcore.io import outdir
 from sphcore.jit import prepare
 from sphcore.plugin import pluginhost
 from sphcore.run import budget, checkpoint, relax, resume, threads
+from sphcore.run.activities import Activity, EveryStep, periodic
+from sphcore.run.build import build
 from sphcore.run.progress import Progress
 
 MARKER = outdir.MARKER  # only directories whose marker proves it are overwritten (see outdir)
+
+
+@dataclass
+class RunResult:
+    """What a run ended with: ``status`` ("completed", "unstable", "stopped", "output_error"
+    or "failed"), ``message`` (empty when completed), ``summary`` (what summary.json holds),
+    ``simulation`` (the Simulation as the run left it: its run state, plugins and context)
+    and ``signum`` (the signal that stopped it, or None). ``result[key]`` and
+    ``result.get(key)`` read the summary."""
+
+    status: str
+    message: str
+    summary: dict
+    simulation: object
+    signum: int | None = None
+
+    def __getitem__(self, key):
+        return self.summary[key]
+
+    def get(self, key, default=None):
+        return self.summary.get(key, default)
+
+    def __contains__(self, key) -> bool:
+        return key in self.summary
+
+    @property
+    def t(self) -> float:
+        return self.summary["t"]
+
+    @property
+    def steps(self) -> int:
+        return self.summary["steps"]
+
+    @property
+    def output_dir(self) -> Path:
+        return Path(self.summary["output_dir"])
+
+    @property
+    def state(self):
+        """The run state (:class:`sphcore.run.state.RunState`) at the end."""
+        return self.simulation.run
 
 
 class Stopped(Exception):
@@ -92,7 +139,7 @@ def _write_json(path: Path, data: dict):
 
 
 def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restart=False, progress=None,
-        quiet=False) -> dict:
+        quiet=False) -> RunResult:
     case, pm = load(case_dir, overrides, t_end)
     out = output_path(case, output)
     mode = "off" if quiet else (progress or case.config["output"]["progress"])
@@ -111,7 +158,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     # particles and plugins are set up, and the first step sized, before anything touches
     # the disk: a case that fails there leaves the output directory as it was
     try:
-        sim = budget.simulation(case, pm, out, restarting=restart)
+        sim = build(case, pm, out, restarting=restart)
     except CaseError as e:  # the relaxation's errors name its key, which may have come from --set
         raise _blame_option(e, overrides, t_end) from None
     relaxed = sim.ctx.stats("core").get("relax")
@@ -132,8 +179,6 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
            if threading.current_thread() is threading.main_thread() else {})
     bar = Progress(sim.t_end, sim.state.n, mode, case.config["output"]["log_interval_s"])
     start, step0, status, message = time.perf_counter(), sim.step, "failed", "an unexpected error (a bug: see the traceback)"
-    clock = resume.CheckpointClock(case.config["output"]["checkpoint_every_s"],
-                                   case.config["output"]["checkpoint_every_dt"], sim.t)
 
     def segments(state, wall):
         return past["segments"] + [{"steps": sim.step - step0, "wall_time_s": wall,
@@ -149,6 +194,26 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
 
     tuner, threads_before = threads.tuner_for(case.config), numba.get_num_threads()
     numba.set_num_threads(tuner.current)
+    step_wall = [0.0]  # wall time of the step just taken (s), for the thread tuner
+
+    def tune(sim):
+        count = tuner.after_step(step_wall[0])
+        if count != numba.get_num_threads():
+            numba.set_num_threads(count)
+
+    def stop_if_asked(sim):
+        if stop["signum"] is not None:
+            save_checkpoint("stopped")
+            raise Stopped(stop["signum"])
+
+    # after each step, in this order (sphcore.run.activities)
+    after_step = [Activity("threads", EveryStep(), tune),
+                  Activity("writers", EveryStep(), lambda sim: sim.output()),
+                  Activity("progress", EveryStep(), bar.update),
+                  Activity("signal", EveryStep(), stop_if_asked),
+                  Activity("checkpoint", periodic(case.config["output"]["checkpoint_every_s"],
+                                                  case.config["output"]["checkpoint_every_dt"], sim.t),
+                           lambda sim: save_checkpoint())]
     try:
         if not restart:
             save_checkpoint()  # a restart point exists before any frame, whatever stops the run
@@ -157,16 +222,9 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
         while not sim.done():
             t0 = time.perf_counter()
             sim.advance()
-            count = tuner.after_step(time.perf_counter() - t0)
-            if count != numba.get_num_threads():
-                numba.set_num_threads(count)
-            sim.output()
-            bar.update(sim)
-            if stop["signum"] is not None:
-                save_checkpoint("stopped")
-                raise Stopped(stop["signum"])
-            if clock.due(sim.t):
-                save_checkpoint()
+            step_wall[0] = time.perf_counter() - t0
+            for activity in after_step:
+                activity(sim)
         sim.output(final=True)
         save_checkpoint("completed")
         status, message = "completed", ""
@@ -215,9 +273,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
                     summary["message"] = f"{e}; the last checkpoint is kept (--restart)"
                 elif summary["status"] != "failed":
                     summary["message"] += f"; also {e}"
-    summary["_sim"] = sim
-    summary["_signum"] = stop.get("stopped_by")
-    return summary
+    return RunResult(summary["status"], summary["message"], summary, sim, stop.get("stopped_by"))
 
 
 def kernels_cached(dim: int = 2) -> bool:
@@ -225,8 +281,4 @@ def kernels_cached(dim: int = 2) -> bool:
     (else the first step compiles it; the pair loop is built per dimension)."""
     from sphcore.physics import equations
 
-    try:  # where numba itself keeps it (in-tree __pycache__, or the user-wide fallback)
-        places = [Path(equations._RATES[dim, False]._cache._cache_path)]
-    except AttributeError:  # another numba: look where it caches by default
-        places = [Path(equations.__file__).parent / "__pycache__"]
-    return any(any(p.glob(f"equations._sph_rates_{dim}d*.nbi")) for p in places if p.is_dir())
+    return equations.compiled_on_disk(dim)

@@ -1,9 +1,10 @@
-"""The simulation: builds the particles and the run context, and steps them.
+"""The simulation: the run state wired to the physics and the plugins, and one step.
 
-A step reads: reorder (when due) -> dt -> integrator (rates, free motion,
-``sph_after_integrate``) -> checks -> ``sph_after_step`` -> ``sph_output``. Only the
-physics a case asks for runs; ``ctx.counters`` records which kernels ran, for tests and
-for the run summary.
+A step reads: reorder (when due) -> density filter (when due) -> rates -> dt -> free motion
+-> ``sph_after_integrate`` (walls) -> equation of state -> rates at the new state (and the
+leapfrog's corrector) -> checks (when due) -> ``sph_after_step``. Only the physics a case
+asks for runs; ``ctx.counters`` records which kernels ran, for tests and for the run
+summary. A Simulation is made by :func:`sphcore.run.build.build` from a case.
 """
 
 from __future__ import annotations
@@ -14,149 +15,63 @@ from pathlib import Path
 import numpy as np
 
 from sphcore.errors import CaseError, Instability
-from sphcore.physics import checks, eos
+from sphcore.physics import checks
 from sphcore.physics.forces import Forces, PressureField
 from sphcore.physics.integrators import SCHEMES
-from sphcore.physics.params import derive
-from sphcore.physics.particles import FLUID, SPHERE, ParticleState, lattice, make_block
 from sphcore.physics.timestep import adaptive_dt, max_norms
 from sphcore.plugin.context import RunContext
 from sphcore.plugin.pluginhost import HookRelay
-from sphcore.run import checkpoint, relax
+from sphcore.run.activities import Activity, StepInterval
+from sphcore.run.state import RunState, Snapshot
 
 CORE = "core"  # the core's own figures in the stats namespaces (energy reference, growth)
-
-KIND_CODES = {"fluid": FLUID, "sphere": SPHERE}  # case.toml block kind -> state.kind
-INSIDE_TOL = 1e-9  # relative to the radius: a particle at d = r - ulp still counts as inside
-
-
-def block_positions(case, k, b):
-    """Centres of block k: its lattice, less the particles a finite wall removes (closer
-    than a radius to a face, or in a solid); (positions, removed count). A centre beyond
-    a wall plane is an error naming the block."""
-    dx, r = case.dx, case.radius
-    pos = lattice(b["min"], b["max"], dx, b["count"])
-    if pos.shape[0] == 0:
-        raise CaseError(case.file, f"blocks[{k}]", f"the block holds no particle at dx = {dx} m")
-    d = case.planes.distances(pos)
-    bad = np.argwhere(d < r * (1.0 - INSIDE_TOL))
-    if bad.size:
-        i, p = bad[0]
-        raise CaseError(case.file, f"blocks[{k}]", f"particle at {pos[i].round(9).tolist()} is outside wall plane {p} "
-                        f"(distance {d[i, p]:.6g} m < radius {r:.6g} m){_rounding_hint(k, b, dx, pos[i])}")
-    if case.faces.count == 0:
-        return pos, 0
-    keep = (case.faces.distances(pos) >= r * (1.0 - INSIDE_TOL)) & case.faces.in_fluid(pos)
-    if not keep.any():
-        raise CaseError(case.file, f"blocks[{k}]", "every particle of the block lies in a solid wall or "
-                        "closer than a radius to a wall face")
-    return np.ascontiguousarray(pos[keep]), int(pos.shape[0] - keep.sum())
-
-
-def _rounding_hint(k, b, dx, x) -> str:
-    """When the block's extent is not a whole number of dx and rounding up put the row of
-    the particle x past the block's max (and so into a wall): what to change (a dx changed
-    with --set meets this first)."""
-    if b.get("count") is not None:
-        return ""
-    lo, hi = np.asarray(b["min"], float), np.asarray(b["max"], float)
-    cells = (hi - lo) / dx
-    up = np.nonzero((np.rint(cells) > cells + 1e-9) & (x + 0.5 * dx > hi + 1e-9 * dx))[0]
-    if up.size == 0:
-        return ""
-    a = int(up[0])
-    fit = hi.copy()
-    fit[a] = lo[a] + np.floor(cells[a] + 1e-9) * dx
-    vec = ", ".join(f"{v:.9g}" for v in fit)
-    return (f"; the block's extent along axis {a}, {hi[a] - lo[a]:.6g} m, is {cells[a]:.4g} dx, rounded up to "
-            f"{int(np.rint(cells[a]))} rows: give max[{a}] = {fit[a]:.9g} (--set 'blocks[{k}].max=[{vec}]') "
-            f"or a dx that divides the extent")
-
-
-def build_state(case) -> ParticleState:
-    """Particles of every [[blocks]] entry; each must lie inside every wall plane, and those a
-    finite wall covers are not created (``state.removed_by_walls`` counts them)."""
-    r, rho0 = case.radius, case.config["fluid"]["rho0"]
-    state = ParticleState.empty(case.dim)
-    removed = 0
-    for k, b in enumerate(case.blocks):
-        pos, m = block_positions(case, k, b)
-        removed += m
-        state.append(make_block(pos, b["velocity"], rho0, case.dx, r, KIND_CODES[b["kind"]]))
-    state.removed_by_walls = removed
-    return state
-
-
-def block_tops(case, state) -> np.ndarray:
-    """For each particle, the height (m, along -g) of the top of its block: its free surface
-    at rest. Blocks are appended in order, so particle ids run block by block."""
-    g = np.linalg.norm(case.gravity)
-    up = -case.gravity[: case.dim] / g if g > 0 else np.zeros(case.dim)
-    z = state.pos @ up
-    tops = np.empty(state.n)
-    start = 0
-    for k, b in enumerate(case.blocks):
-        n_b = block_positions(case, k, b)[0].shape[0]
-        tops[start:start + n_b] = z[start:start + n_b].max() + 0.5 * case.dx
-        start += n_b
-    return tops
 
 
 class Simulation:
     """One run: the particles, the run context handed to plugins, the force evaluation and
     the integrator, and the step loop. ``pm`` is the run's pluggy PluginManager.
 
-    A step reads: reorder (when due) -> density filter (when due) -> dt -> integrator
-    (free motion, ``sph_after_integrate``, rates) -> checks -> ``sph_after_step``;
-    the runner then calls :meth:`output`.
+    ``params``: the run's constants (:class:`sphcore.physics.params.Params`); ``run``: its
+    state (:class:`sphcore.run.state.RunState`), from the case or a checkpoint. A step is
+    :meth:`advance` (module docstring); the runner then calls :meth:`output`.
     """
 
-    def __init__(self, case, pm, output_dir: Path | None = None, restarting: bool = False, relaxing: bool = False,
-                 settle: bool = True):
+    def __init__(self, case, pm, params, run: RunState, output_dir: Path | None = None, restarting: bool = False,
+                 relaxing: bool = False):
         self.case, self.pm = case, pm
-        self.relaxing = relaxing  # a copy of the run settling its start (sphcore.run.relax): no sph_after_step
-        state = build_state(case)
-        cfg = case.config
-        sph = cfg["physics"]["sph"]
-        surface = 0.0
-        tops = None
-        if sph and np.linalg.norm(case.gravity) > 0:
-            tops = block_tops(case, state)
-            surface = float(tops.max())  # hydrostatic reference of the modified pressure (m)
-        prm = derive(case, state, surface)
-        self.ctx = ctx = RunContext(case, prm, state, output_dir, restarting,
+        self.relaxing = relaxing  # the relaxation's own run (sphcore.run.relax): no sph_after_step
+        self.run = run
+        self.pressure = PressureField(params)
+        self.ctx = ctx = RunContext(case, params, run, self.pressure, output_dir, restarting,
                                     plugin_name=lambda plugin: pm.get_name(plugin) or type(plugin).__name__)
-        if tops is not None and cfg["physics"]["hydrostatic_init"] and not prm.modified_pressure:
-            _hydrostatic_start(case, prm, state, tops)
-        saved = checkpoint.read(output_dir) if restarting else None
-        relaxed = None
-        if settle and not (saved or relaxing) and cfg["relax"]["time"] > 0:  # settle=False: sph check
-            relaxed = relax.settle(case, state)  # positions and densities at rest in the scheme's equilibrium
-        if saved:  # constants above come from the case's initial particles, as in the first run
-            checkpoint.restore_state(ctx, *saved)
-        self.pressure = PressureField(prm)
-        ctx._pressure = self.pressure
         self.hooks = HookRelay(pm)  # the per-step hooks (no pluggy call where none is implemented)
         self.forces = Forces(ctx, self.hooks, self.pressure)
-        self.integrator = SCHEMES[cfg["integrator"]["scheme"]](
-            ctx.state, self.forces, self._after_drift, self.update_pressure, evolves_density=sph)
-        ctx._rates = self.integrator
-        if relaxed is not None:
-            ctx.stats(CORE)["relax"] = relaxed
+        run.attach_pairs(self.forces.pairs)  # a restart's lists are rebuilt from its anchor
+        self.integrator = SCHEMES[case.config["integrator"]["scheme"]](run, self.forces.evaluate,
+                                                                      evolves_density=params.sph)
         pm.hook.sph_setup(ctx=ctx)  # every ctx attribute is usable here
         self.integrator.resize()  # a plugin may have added particles
-        if saved:
-            checkpoint.restore_rates(self, *saved)
         self.update_pressure()
         # energy can only fall unless a plugin does work on the particles (adds accelerations);
         # a plugin that adds them says whether they are conservative through sph_energy
         working = sorted({i.plugin_name for i in pm.hook.sph_accelerations.get_hookimpls()}
                          - {i.plugin_name for i in pm.hook.sph_energy.get_hookimpls()})
-        self.check_energy = cfg["checks"]["energy_growth"] > 0 and not working
+        self.check_energy = case.config["checks"]["energy_growth"] > 0 and not working
         ctx.stats(CORE)["energy_check"] = (
             "on" if self.check_energy else "off: checks.energy_growth = 0" if not working else
             f"off: plugin(s) {', '.join(working)} add accelerations and report no energy (sph_energy)")
         self._energy_reference()
+        # what a step does before it moves the particles, on step counts (sphcore.run.activities)
+        cfg = case.config
+        self.before_step = []
+        if params.sph:
+            self.before_step.append(Activity("reorder", StepInterval(cfg["neighbours"]["sort_every"]),
+                                             Simulation.reorder))
+            if cfg["corrections"]["shepard_every"]:
+                self.before_step.append(Activity("density_filter",
+                                                 StepInterval(cfg["corrections"]["shepard_every"], skip_first=True),
+                                                 Simulation.shepard_filter))
+        self.checks_due = StepInterval(cfg["checks"]["every"])
 
     # -- what plugins and the runner read ----------------------------------------------
 
@@ -188,10 +103,20 @@ class Simulation:
     def counters(self):
         return self.ctx.counters
 
-    # -- pieces of a step ---------------------------------------------------------------
+    # -- the state as a whole ---------------------------------------------------------------
 
-    def _after_drift(self, pos0, pos, vel, acc, dt):
-        self.hooks.sph_after_integrate(ctx=self.ctx, pos0=pos0, pos=pos, vel=vel, acc=acc, dt=dt)
+    def snapshot(self) -> Snapshot:
+        """A copy of the run state, and of the force pressure derived from it."""
+        snap = self.run.snapshot()
+        snap.extra["force_pressure"] = self.ctx.force_pressure.copy()
+        return snap
+
+    def restore(self, snap: Snapshot) -> None:
+        """Put a :meth:`snapshot` back: the run continues exactly as from where it was taken."""
+        self.run.restore(snap)
+        self.ctx.force_pressure[...] = snap.extra["force_pressure"]
+
+    # -- pieces of a step ---------------------------------------------------------------
 
     def update_pressure(self):
         self.pressure.update(self.ctx.state, self.ctx.counters)
@@ -236,21 +161,23 @@ class Simulation:
 
     def advance(self):
         """One complete step."""
-        ctx, cfg = self.ctx, self.case.config
-        if ctx.step % cfg["neighbours"]["sort_every"] == 0 and ctx.params.sph:
-            self.reorder()
-        shepard_every = cfg["corrections"]["shepard_every"] if ctx.params.sph else 0
-        if shepard_every and ctx.step > 0 and ctx.step % shepard_every == 0:
-            self.shepard_filter()
+        ctx = self.ctx
+        for activity in self.before_step:
+            activity(self)
         self.integrator.rates()  # dt needs the current accelerations (force limit)
         ctx.dt = self.choose_dt()
         if ctx.t + ctx.dt == ctx.t:  # a step below the round-off of t would hang the run
             raise Instability(ctx.step, ctx.t, -1, f"time step {ctx.dt:.3g} s is below the round-off of t: "
                               "time cannot advance")
-        self.integrator.step(ctx.dt)
+        integ, st = self.integrator, self.state
+        integ.free_motion(ctx.dt)
+        self.hooks.sph_after_integrate(ctx=ctx, pos0=integ.pos0, pos=st.pos, vel=st.vel, acc=integ.acc, dt=ctx.dt)
+        self.update_pressure()
+        if integ.finish(ctx.dt):  # the density changed again: its pressure too
+            self.update_pressure()
         ctx.t += ctx.dt
         ctx.step += 1
-        if ctx.step % cfg["checks"]["every"] == 0:
+        if self.checks_due.due(self.run.clock):
             self.check()
         if not self.relaxing:  # gauges and probes sample the run, not its relaxation
             self.hooks.sph_after_step(ctx=ctx)
@@ -278,7 +205,7 @@ class Simulation:
 
     def check(self):
         st, ck, prm, core = self.state, self.case.config["checks"], self.params, self.ctx.stats(CORE)
-        walls = self.ctx.walls
+        walls = self.ctx.planes
         code, i, value = checks.scan(st.pos, st.vel, st.rho, ck["rho_min"] * prm.rho0, ck["rho_max"] * prm.rho0,
                                      prm.sph, walls.normals, walls.offsets)
         self.counters["checks"] += 1
@@ -306,29 +233,3 @@ class Simulation:
         return self.t_end - self.t <= 1e-9 * (self.dt or self.t_end)
 
 
-def _hydrostatic_start(case, prm, st, tops):
-    """Each fluid block at rest in the discrete equilibrium of the SPH sums: the exact
-    hydrostatic pressure of the Tait fluid below the block's top
-    (:func:`sphcore.physics.eos.hydrostatic_pressure`), the density from the inverse Tait equation,
-    and the mass of each particle scaled by rho / rho0, since the particles stand on a
-    uniform lattice: the fluid's extra mass at depth is in the masses, not in a closer
-    spacing.
-
-    Until 2026-11-24 the pressure was rho0 g d and the masses rho0 dx^dim. The pressure
-    sums of a uniform lattice of equal masses then see the density stratification only
-    through the p_j / rho_j^2 of the momentum equation: in a 1 m tank of plain Tait water at
-    h = 1.5 dx the interior's vertical acceleration drifted from -0.004 g under the free
-    surface to -0.018 g at the bottom, and a particle along a side wall differed from its
-    interior neighbours by up to 0.004 g (a shear the wall's terms do not carry). Now both
-    are -0.0026 g everywhere below the free surface's reach ((lambda - 1) g, the lattice
-    normalisation), walls included (``tests/test_hydrostatic_start.py``).
-    """
-    fluid = st.kind == FLUID
-    p = eos.hydrostatic_pressure(tops[fluid] - st.pos[fluid] @ prm.up, prm.rho0, prm.c0, prm.gamma, prm.g_abs)
-    if not np.all(np.isfinite(p)):
-        raise CaseError(case.file, "eos.gamma", f"a Tait exponent {prm.gamma:g} with c0 = {prm.c0:g} m/s "
-                        "cannot hold the fluid's depth at rest (the hydrostatic density diverges); "
-                        "raise eos.gamma or the sound speed, or set physics.hydrostatic_init = false")
-    rho = eos.density_of(p, prm.rho0, prm.c0, prm.gamma)
-    st.rho[fluid] = rho
-    st.m[fluid] *= rho / prm.rho0

@@ -62,7 +62,7 @@ class Plan:
 def plan(case_dir, vary=(), sets=(), t_end=None) -> Plan:
     """Expand and validate; raises :class:`CaseError` naming the key and the variant."""
     from sphcore.run import runner
-    from sphcore.run.simulation import build_state
+    from sphcore.run.build import build_state
 
     case_dir = Path(case_dir).resolve()
     file = case_file(case_dir)

@@ -38,14 +38,9 @@ def _jsonable(x):
     return str(x)
 
 
-def public(summary: dict) -> dict:
-    """The summary without in-process objects (keys starting with "_")."""
-    return {k: v for k, v in summary.items() if not k.startswith("_")}
-
-
 def run_variant(case_dir: str, output: str, overrides: list, t_end: float | None = None,
                 timeout_s: float | None = None) -> dict:
-    """Run one variant; returns its summary without "_" keys plus ``task_wall_s`` (s, the
+    """Run one variant; returns its summary (as summary.json holds it) plus ``task_wall_s`` (s, the
     process's whole life). Never raises: a run that cannot start or crashes comes back
     with status 'failed', one that passes ``timeout_s`` with status 'timeout'."""
     start = time.perf_counter()
@@ -113,9 +108,8 @@ def child_main():
     from sphcore.run import runner
 
     try:
-        summary = public(runner.run(payload["case_dir"], payload["output"],
-                                    [tuple(o) for o in payload["overrides"]], payload["t_end"],
-                                    overwrite=True, quiet=True))
+        summary = runner.run(payload["case_dir"], payload["output"], [tuple(o) for o in payload["overrides"]],
+                             payload["t_end"], overwrite=True, quiet=True).summary
     except (CaseError, OutputError, pluginhost.PluginLoadError) as e:
         summary = {"status": "failed", "message": str(e)}
     except Exception as e:  # a bug: the traceback goes to the variant's log

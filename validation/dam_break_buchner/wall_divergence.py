@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 from sphcore.testing import write_case
 
 BOX = """
@@ -58,7 +58,7 @@ def layer_rates(dim: int, hdx: float, use: str, layers: int, work: Path) -> list
     lo, hi = [0.0] * dim, [SIDE] * dim
     text = BOX.format(dim=dim, lo=lo, hi=hi, dx=DX, hdx=hdx, g=[0.0] * dim, use=use)
     case, pm = runner.load(write_case(work / f"box{dim}_{hdx}_{len(use)}", text))
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     st = sim.ctx.state
     x = st.pos
     st.vel[:] = 0.0

@@ -29,7 +29,7 @@ import numpy as np
 
 from sphcore.case.overrides import parse_set
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 
 ROOT = Path(__file__).resolve().parents[2]  # the repository
 BOUNDARIES = {"wall model": '["reflective","wall_integral"]', "ghosts": '["ghost","reflective"]'}
@@ -40,7 +40,7 @@ def stiffness(case_dir: Path, h: float, plugins: str) -> dict:
     sets = ["physics.modified_pressure=false", f"kernel.h_over_dx={h}", "density_diffusion.delta=0.1",
             "density_diffusion.hydrostatic=true", f"plugins.use={plugins}"]
     case, pm = runner.load(case_dir, [parse_set(s) for s in sets])
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     st, dx = sim.state, case.dx
     g = float(np.linalg.norm(case.gravity))
 

@@ -33,7 +33,7 @@ import numpy as np
 from sphcore.case.overrides import parse_set
 from sphcore.errors import CaseError
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 from sphcore_plugins.gauges.hydrostatic import layer_errors
 
 ROOT = Path(__file__).resolve().parents[2]  # the repository
@@ -70,9 +70,9 @@ def cross_start(case_dir, relax_with, run_with, h, relax, time, run_sets=()):
     Returns the second boundary's start accelerations (layers from the top x ``columns``
     x 2, in g), the columns, the largest displacement at the end (dx) and the layers'
     pressure errors at the end (fractions, top layer first)."""
-    first = Simulation(*load(case_dir, relax_with, h, relax))
+    first = build(*load(case_dir, relax_with, h, relax))
     case, pm = load(case_dir, run_with, h, 0.0, time, run_sets)
-    sim = Simulation(case, pm)
+    sim = build(case, pm)
     a, b = by_id(sim.state), by_id(first.state)
     if not np.array_equal(sim.state.id[a], first.state.id[b]):
         raise ValueError("the two runs do not hold the same particles")

@@ -1,6 +1,6 @@
 """A tank at rest, linearised: growth rates, the acoustic quarter wave and the sloshing mode.
 
-    python postprocessing/rest_stability.py [--h 1.3 1.5 1.7 1.9 2.0] [--size 0.4 0.4] [--span S]
+    python validation/hydrostatic_tank/rest_stability.py [--h 1.3 1.5 1.7 1.9 2.0] [--size 0.4 0.4] [--span S]
         [--boundary wall_model ghosts reflective] [--set KEY=VALUE ...] [--jitter A --run T]
         [--relax T [TAU]] [--no-modes]
 
@@ -56,10 +56,10 @@ import numpy as np
 from sphcore.case.overrides import parse_set
 from sphcore.physics.linearised import column_at_rest
 from sphcore.run import runner
-from sphcore.run.simulation import Simulation
+from sphcore.run.build import build
 from sphcore_plugins.gauges.hydrostatic import layer_errors, worst_layer_error
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 BOUNDARIES = {"wall_model": '["reflective","wall_integral"]', "ghosts": '["ghost","reflective"]',
               "reflective": '["reflective"]'}
 
@@ -76,7 +76,7 @@ def tank(h: float, boundary: str, size=(0.4, 0.4), sets=(), span=None, case_dir=
                  f"blocks[0].max=[{w},{d},{span}]"]
     over += list(sets)
     case, pm = runner.load(case_dir, [parse_set(s) for s in over])
-    return Simulation(case, pm)
+    return build(case, pm)
 
 
 def worst_layer(sim) -> float:
