@@ -178,3 +178,25 @@ def test_restart_with_a_kept_list_is_bit_for_bit(tmp_path, skin, at):
     sa, sb = by_id(a.state), by_id(b.state)
     for name in sa:
         assert np.array_equal(sa[name], sb[name]), name
+
+
+def test_a_restart_that_takes_no_step_keeps_the_lists_anchor(tmp_path):
+    """Restarting a completed run at its own t_end takes no step but rewrites the
+    checkpoint: the rewritten one must carry the pair list's anchor, so that a later
+    extension continues as an extension of the run without that restart, bit for bit."""
+    dt = 2.0**-13
+    t1, t2 = 15 * dt, 40 * dt
+    text = COLLIDING.replace("t_end = 0.01", f"t_end = {t2!r}\ndt = {dt!r}") + "\n[neighbours]\nskin = 0.3\n"
+    case_dir = write_case(tmp_path / "case", text)
+    for name in ("plain", "noop"):
+        runner.run(case_dir, output=tmp_path / name, t_end=t1, quiet=True)
+    noop = runner.run(case_dir, output=tmp_path / "noop", t_end=t1, restart=True, quiet=True)
+    assert noop.status == "completed" and noop.simulation.step == 15
+    with np.load(tmp_path / "noop" / "checkpoint.npz") as z:
+        assert "pair_list_positions" in z.files
+    a = runner.run(case_dir, output=tmp_path / "plain", t_end=t2, restart=True, quiet=True).simulation
+    b = runner.run(case_dir, output=tmp_path / "noop", t_end=t2, restart=True, quiet=True).simulation
+    assert a.step == b.step == 40
+    sa, sb = by_id(a.state), by_id(b.state)
+    for name in sa:
+        assert np.array_equal(sa[name], sb[name]), name

@@ -157,8 +157,10 @@ class PairList:
         self._followed = True
 
     def checkpoint(self) -> np.ndarray | None:
-        """The positions of the last build (None: no list kept), for a restart."""
-        return self.pos_ref if self._valid else None
+        """The positions of the last build, or those a restart will build from (None: no
+        list kept), for a checkpoint: a checkpoint written before the restarted run's first
+        evaluation carries the same anchor as the one it restarted from."""
+        return self.pos_ref if self._valid or self._restored else None
 
     def restore(self, pos_ref: np.ndarray):
         """Continue a run: the next :meth:`view_of` rebuilds from these positions first."""
