@@ -21,6 +21,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+# the scripts run as a user runs them, each in a process of its own: the slow tier
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks"
 UNAVAILABLE = 77  # exit status of a script that cannot run here (its one line says why)

@@ -180,6 +180,7 @@ def test_result_does_not_depend_on_the_thread_count(tmp_path, dim):
         assert np.array_equal(out[0][0], acc) and np.array_equal(out[0][1], drho)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kernel_gradient", [False, True])
 def test_three_passes_give_the_fused_loops_bits_in_3d(tmp_path, kernel_gradient):
     """The 3D pair loop walks a particle's partners in three passes (gather, vectorised

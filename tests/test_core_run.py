@@ -178,6 +178,7 @@ def test_restart_without_checkpoint_is_a_case_error(good_case, tmp_path, capsys)
     (["reflective"], ["physics.modified_pressure=true"]),
     (["reflective", "wall_integral"], ["density_diffusion.delta=0.1"]),
 ])
+@pytest.mark.slow
 def test_a_time_step_allocates_no_array_per_particle(tmp_path, plugins, overrides):
     """numpy allocations during a step (tracemalloc; numba's own are not traced) stay far
     below one float per particle (400 kB at 50,000 particles), over twelve steps that

@@ -270,6 +270,7 @@ def test_buffers_grow_and_are_reused():
     np.testing.assert_allclose(out.pos, [[0.5, -0.004]])
 
 
+@pytest.mark.slow
 def test_serial_and_parallel_kernels_agree():
     box = Planes.box(np.zeros(3), np.ones(3))
     rng = np.random.default_rng(1)

@@ -114,6 +114,7 @@ def test_no_escape_no_crossing_finite(params):
     assert not counts[short].any()
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(scenes(accelerate=False))
 def test_restitution_never_adds_energy(params):
@@ -124,6 +125,7 @@ def test_restitution_never_adds_energy(params):
     assert np.isfinite(pos).all() and np.isfinite(v).all()
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(scenes(cr=1.0, accelerate=False))
 def test_elastic_walls_keep_the_speed(params):

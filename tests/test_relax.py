@@ -53,6 +53,7 @@ def run_tank(tmp_path, name, *sets):
     return json.loads((tmp_path / f"{name}_out" / "summary.json").read_text())
 
 
+@pytest.mark.slow
 def test_a_relaxed_tank_stays_at_rest_where_the_lattice_slides(tmp_path):
     """5 s of plain-Tait water with the wall model at h = 1.5 dx: from the lattice the
     particles slide by 0.28 dx (measured), from the relaxed start (10 s of damped motion)

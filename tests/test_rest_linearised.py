@@ -73,6 +73,7 @@ def test_the_jacobian_predicts_the_rates_of_a_small_random_disturbance(boundary)
         assert np.abs(change - (jac @ u)[b[checked]]).max() < tol * np.abs(change).max()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("boundary", list(BOUNDARIES))
 def test_the_column_rings_at_its_quarter_wave(at_h2, boundary):
     """Ghosts mirror the fluid and carry the rigid floor's reflection exactly (within 1 %);
@@ -148,6 +149,7 @@ def test_the_script_relaxes_a_tank_and_runs_it_from_there():
     assert last_displacement(run) < 0.01 and "worst layer below the top two" in run
 
 
+@pytest.mark.slow
 def test_a_3d_column_rings_at_its_quarter_wave_along_its_up_axis():
     """3D, y up (the case's gravity): a 6 x 6 x 6 block with ghosts at h = 2 dx rings within
     5 % of pi c0 / (2 H) (measured -3.2 %; six particles deep is coarse, the 10 x 8 x 10 tank

@@ -189,6 +189,7 @@ def test_a_probe_inside_an_obstacle_is_refused_one_on_its_face_is_not(tmp_path):
             assert err.value.key == "probes.pressure[0].point" and "inside a solid wall" in err.value.expected
 
 
+@pytest.mark.slow
 def test_the_wall_model_holds_a_tank_with_a_step_at_rest(tmp_path):
     # water 1 m deep at rest over a box step 0.2 m high on the floor, plain Tait pressure
     # (no modified pressure), delta = 0.1: with the wall model on planes and faces the
