@@ -92,7 +92,7 @@ def case_attributes(config: dict, prefix: str = "") -> dict:
     return out
 
 
-def _fail(path: Path, what: str, err: Exception) -> OutputError:
+def output_error(path: Path, what: str, err: Exception) -> OutputError:
     reason = getattr(err, "strerror", None) or str(err)
     return OutputError(f"{path}: cannot {what}: {reason}")
 
@@ -105,7 +105,7 @@ def new_dataset(path: Path, title: str, comment: str, attrs: dict) -> netCDF4.Da
     try:
         ds = netCDF4.Dataset(path, "w", format=FORMAT)
     except (OSError, RuntimeError) as err:
-        raise _fail(path, "create the netCDF file", err) from err
+        raise output_error(path, "create the netCDF file", err) from err
     try:
         ds.set_auto_maskandscale(False)
         ds.createDimension("time", None)
@@ -119,7 +119,7 @@ def new_dataset(path: Path, title: str, comment: str, attrs: dict) -> netCDF4.Da
         })
     except (OSError, RuntimeError) as err:
         del ds  # not close(): see NetcdfWriter._abandon
-        raise _fail(path, "write the netCDF header", err) from err
+        raise output_error(path, "write the netCDF header", err) from err
     return ds
 
 
@@ -154,7 +154,7 @@ class NetcdfWriter(ScheduledWriter):
             self.ds.sync()
         except (OSError, RuntimeError) as err:
             self._abandon()
-            raise _fail(self.path, "close", err) from err
+            raise output_error(self.path, "close", err) from err
         ds, self.ds = self.ds, None
         ds.close()
 
@@ -196,7 +196,7 @@ class NetcdfWriter(ScheduledWriter):
             self.ds.sync()
         except (OSError, RuntimeError) as err:
             self._abandon()
-            raise _fail(self.path, f"write the frame at step {ctx.step}", err) from err
+            raise output_error(self.path, f"write the frame at step {ctx.step}", err) from err
         self.row += 1
 
     def _create(self, ctx, st, order) -> None:
@@ -218,7 +218,7 @@ class NetcdfWriter(ScheduledWriter):
         except (OSError, RuntimeError) as err:
             del ds  # not close(): see _abandon
             self._failed = True
-            raise _fail(self.path, "write the netCDF header", err) from err
+            raise output_error(self.path, "write the netCDF header", err) from err
         self.ds, self.row, self.ids = ds, 0, st.id[order].copy()
 
     # ---------------------------------------------------------------- restart
@@ -248,12 +248,12 @@ class NetcdfWriter(ScheduledWriter):
             ok = np.isfinite(times) & (steps <= ctx.step)
             keep = len(ok) if ok.all() else int(np.argmin(ok))
             if keep < len(steps):
-                _rewrite_first(path, keep)
+                rewrite_first(path, keep)
             ds = netCDF4.Dataset(path, "a")
             ds.set_auto_maskandscale(False)
             ids = ds["id"][:]
         except (OSError, RuntimeError, KeyError, IndexError) as err:
-            raise _fail(path, "reopen the netCDF file to restart", err) from err
+            raise output_error(path, "reopen the netCDF file to restart", err) from err
         self.ds, self.path, self.row, self.ids = ds, path, keep, ids
         if keep:
             t_last = float(times[keep - 1])
@@ -271,7 +271,7 @@ def header_cut(path: Path, names) -> bool:
         return not set(names) <= set(src.variables)
 
 
-def _rewrite_first(path: Path, keep: int) -> None:
+def rewrite_first(path: Path, keep: int) -> None:
     """Replace ``path`` by a copy holding only its first ``keep`` frames (atomic rename)."""
     import netCDF4
     tmp = path.with_name(f".{path.name}.tmp")

@@ -17,7 +17,6 @@ leaves a half-written frame or collection behind.
 
 from __future__ import annotations
 
-import os
 import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -25,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sphcore.api import Option, OutputError, ScheduledWriter, hookimpl
+from sphcore.api import Option, OutputError, ScheduledWriter, hookimpl, write_atomically
 
 if TYPE_CHECKING:  # meshio is imported where a file is written: a run without VTU output
     import meshio  # (or a case that only names the table) does not pay its import time
@@ -41,22 +40,9 @@ def run_name(ctx) -> str:
 
 
 def replace_atomically(path: Path, write) -> None:
-    """Call ``write(tmp_path)``, then rename the result over ``path``.
-
-    The temporary file lives in the same directory so that the rename is atomic (same
-    file system); a failure removes it and raises OutputError naming ``path``.
-    """
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except OSError as err:
-        try:
-            tmp.unlink(missing_ok=True)
-        except OSError:
-            pass  # the directory itself is unwritable: nothing was left behind
-        reason = err.strerror or str(err)
-        raise OutputError(f"{path}: cannot write: {reason}") from err
+    """:func:`sphcore.api.write_atomically` without the fsync: a frame is rewritten often and
+    a crash loses at most the frames after the last checkpoint, which a restart writes again."""
+    write_atomically(path, write, fsync=False)
 
 
 VTK_TYPES = {np.dtype(np.float64): "Float64", np.dtype(np.int64): "Int64", np.dtype(np.int8): "Int8",

@@ -35,16 +35,16 @@ from sphcore.geometry.facegeom import face_distance, first_contact, nearest_poin
 from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
 from sphcore.geometry.faces import Faces
 from sphcore.geometry.planes import Planes, particle_distance, plane_distance
-from sphcore.io.outdir import write_atomically
+from sphcore.io.atomic import write_atomically
 from sphcore.io.schedule import Schedule, schedule_options
 from sphcore.io.writer import ScheduledWriter
 from sphcore.jit.parallel import by_size, on_threads_by_size
 from sphcore.neighbours.cellgrid import CellGrid, Grid, cell_of, cell_range
 from sphcore.physics import eos
-from sphcore.physics.equations import Fields, WallTerms
+from sphcore.physics.equations import WallTerms
 from sphcore.physics.kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
 from sphcore.physics.params import Params
-from sphcore.physics.particles import FLUID, GHOST, SPHERE, ParticleState, Sources
+from sphcore.physics.particles import FLUID, GHOST, SPHERE, Fields, ParticleState, Sources
 from sphcore.plugin.context import RunContext
 from sphcore.plugin.hookspecs import hookimpl
 

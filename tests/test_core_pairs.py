@@ -18,9 +18,10 @@ from core_cases import BLOB
 
 from sphcore.neighbours.cellgrid import CellGrid
 from sphcore.physics.corrections import neighbour_sums
-from sphcore.physics.equations import PAIRS_PARALLEL_MIN, WORK_COLUMNS, Fields, WallTerms, sph_rates
+from sphcore.physics.equations import PAIRS_PARALLEL_MIN, WORK_COLUMNS, WallTerms, sph_rates
 from sphcore.physics.kernels import kernel_f, kernel_w
-from sphcore.physics.wall_completion import _complete_at_wall
+from sphcore.physics.particles import Fields
+from sphcore.physics.wall_completion import complete_at_wall
 
 
 def _setup(tmp_path, dim, seed, kernel_gradient, walls, side=None):
@@ -102,7 +103,7 @@ def _reference(n_dest, src, prm, L, wall):
                 gam += vj * kernel_w(prm.kernel_id, r, h, dim)
                 b[:dim] += -vj * (x @ g) * gr
         if wall.active and wall.share[i] > 0:
-            a0, a1, a2, dr = _complete_at_wall(wall, i, dim, vel, rho[i], p[i], prm.rho_ref, prm.moment_norm,
+            a0, a1, a2, dr = complete_at_wall(wall, i, dim, vel, rho[i], p[i], prm.rho_ref, prm.moment_norm,
                                                prm.gravity, a[0], a[1], a[2], dr, b[0], b[1], b[2], gam)
             a = np.array([a0, a1, a2])
         acc[i] = g + a[:dim]

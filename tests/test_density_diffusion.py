@@ -19,7 +19,8 @@ from conftest import make_sim, write_case
 from core_cases import BLOB
 
 from sphcore.neighbours.cellgrid import CellGrid
-from sphcore.physics.equations import WORK_COLUMNS, Fields, WallTerms, sph_rates
+from sphcore.physics.equations import WORK_COLUMNS, WallTerms, sph_rates
+from sphcore.physics.particles import Fields
 
 
 def _column_rates(tmp_path, dim, k_of_rho=None):

@@ -104,8 +104,8 @@ NAMEDTUPLE_API = {"_fields", "_replace", "_asdict", "_make", "_field_defaults"}
 
 
 def _private_uses(tree: ast.AST):
-    """(line, text) of every ``x._name`` whose ``x`` is not ``self`` or ``cls`` (dunders
-    and names of the module's own classes' instances are not private to another object)."""
+    """(line, text) of every ``x._name`` whose ``x`` is not ``self`` or ``cls`` (dunders are
+    not private), and of every private name imported from another module."""
     for node in ast.walk(tree):
         if isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__"):
             base = node.value
@@ -114,6 +114,10 @@ def _private_uses(tree: ast.AST):
             if node.attr in NAMEDTUPLE_API:
                 continue
             yield node.lineno, ast.unparse(node)
+        elif isinstance(node, ast.ImportFrom) and node.module != "__future__":
+            for alias in node.names:
+                if alias.name.startswith("_") and not alias.name.startswith("__"):
+                    yield node.lineno, f"from {'.' * node.level}{node.module or ''} import {alias.name}"
 
 
 @pytest.mark.parametrize("folder", ["sphcore", "plugins"])

@@ -11,13 +11,13 @@ names are variables along ``probe``; ``rho0`` and ``g`` are global attributes.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sphcore_plugins.netcdf import _fail, _rewrite_first, case_attributes, header_cut, new_dataset
+from sphcore.api import write_atomically
+from sphcore_plugins.netcdf import case_attributes, header_cut, new_dataset, output_error, rewrite_first
 
 if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
     import netCDF4
@@ -94,7 +94,7 @@ class ProbeFile:
             ds.sync()
         except (OSError, RuntimeError) as err:
             del ds  # not close(): see sphcore_plugins.netcdf.NetcdfWriter._abandon
-            raise _fail(self.path, "write the netCDF header", err) from err
+            raise output_error(self.path, "write the netCDF header", err) from err
         self.ds, self.row = ds, 0
 
     def append(self, t, step, pressure, depth, dry):
@@ -110,7 +110,7 @@ class ProbeFile:
             ds.sync()
         except (OSError, RuntimeError) as err:
             self.ds = None  # let the collector close it (see netcdf.py)
-            raise _fail(self.path, f"write the sample at step {step}", err) from err
+            raise output_error(self.path, f"write the sample at step {step}", err) from err
         self.row += 1
 
     def reopen(self, last_step) -> dict | None:
@@ -129,12 +129,12 @@ class ProbeFile:
             ok = np.isfinite(times) & (steps <= last_step)
             keep = len(ok) if ok.all() else int(np.argmin(ok))
             if keep < len(steps):
-                _rewrite_first(self.path, keep)
+                rewrite_first(self.path, keep)
             ds = netCDF4.Dataset(self.path, "a")
             ds.set_auto_maskandscale(False)
             kept = {name: np.array(ds[name][:keep]) for name in ("time", "step", "pressure", "depth", "dry")}
         except (OSError, RuntimeError, KeyError, IndexError) as err:
-            raise _fail(self.path, "reopen the netCDF file to restart", err) from err
+            raise output_error(self.path, "reopen the netCDF file to restart", err) from err
         self.ds, self.row = ds, keep
         return kept
 
@@ -145,7 +145,7 @@ class ProbeFile:
         try:
             ds.close()
         except (OSError, RuntimeError) as err:
-            raise _fail(self.path, "close", err) from err
+            raise output_error(self.path, "close", err) from err
 
 
 def write_csv(path: Path, probes, t, values):
@@ -153,11 +153,5 @@ def write_csv(path: Path, probes, t, values):
     written to a temporary name and renamed, so a reader never sees half a file."""
     path = Path(path)
     header = ",".join(["time_s"] + [f"{p.name}_{'pa' if p.kind == 'pressure' else 'm'}" for p in probes])
-    tmp = path.with_name(f".{path.name}.tmp")
     data = np.column_stack([np.asarray(t, float), np.asarray(values, float).reshape(len(t), len(probes))])
-    try:
-        np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt="%.10g")
-        os.replace(tmp, path)
-    except OSError as err:
-        tmp.unlink(missing_ok=True)
-        raise _fail(path, "write", err) from err
+    write_atomically(path, lambda tmp: np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt="%.10g"))

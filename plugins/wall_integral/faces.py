@@ -30,12 +30,12 @@ from numba import njit
 
 from .tables import OFF, PS, PS2, PW, PW2, SC, WC
 
-_EPS = 1e-12
+EPS = 1e-12
 PS2_ = np.ascontiguousarray(PS2[:, 1])  # Psi_s(2h) in 3D, per kernel
 
 
 @njit(cache=True)
-def _lval(tab, kid, di, q, shift):
+def lval(tab, kid, di, q, shift):
     """Sum_k tab[k] q^(k + shift) for the kernel piece holding q (Laurent row, powers -3..9)."""
     pc = 0 if q < 1.0 else 1
     acc = 0.0
@@ -53,7 +53,7 @@ def _seg_prim2(kid, pc, d, t):
     """(d int_0^t f_s dt, int_0^t W dt) on kernel piece pc, line at distance d (h = 1)."""
     r = math.sqrt(d * d + t * t)
     d2 = d * d
-    am1 = math.asinh(t / d) if d > _EPS else 0.0
+    am1 = math.asinh(t / d) if d > EPS else 0.0
     a0 = t
     a1 = 0.5 * (t * r + d2 * am1)
     s = SC[kid, 0, pc, OFF] * a0 + SC[kid, 0, pc, OFF + 1] * a1
@@ -69,7 +69,7 @@ def _seg_prim2(kid, pc, d, t):
 
 
 @njit(cache=True)
-def _segment2(kid, d, lo, hi):
+def segment2(kid, d, lo, hi):
     """(d int f_s dt, int W dt, int W t dt) over t in [lo, hi] at distance d, h = 1."""
     if d >= 2.0:
         return 0.0, 0.0, 0.0
@@ -90,13 +90,13 @@ def _segment2(kid, d, lo, hi):
             sa, wa = _seg_prim2(kid, pc, d, a)
             s += sb - sa
             w += wb - wa
-    wt = (_lval(PW, kid, 0, math.sqrt(d * d + hi * hi), 0)
-          - _lval(PW, kid, 0, math.sqrt(d * d + lo * lo), 0))
+    wt = (lval(PW, kid, 0, math.sqrt(d * d + hi * hi), 0)
+          - lval(PW, kid, 0, math.sqrt(d * d + lo * lo), 0))
     return s, w, wt
 
 
 @njit(cache=True)
-def _face2(kid, x0, x1, normals, offsets, h, k, d):
+def face2(kid, x0, x1, normals, offsets, h, k, d):
     """(s, int W dt, int W t dt, tau) of face k (a segment) for a point at distance d (units of h)."""
     nx, ny = normals[k, 0], normals[k, 1]
     tx, ty = -ny, nx
@@ -110,13 +110,13 @@ def _face2(kid, x0, x1, normals, offsets, h, k, d):
         cj = normals[j, 0] * tx + normals[j, 1] * ty
         nn = normals[j, 0] * nx + normals[j, 1] * ny
         c = max(dj, 0.0) - d * nn  # d_j at the foot point
-        if cj > _EPS:
+        if cj > EPS:
             lo = max(lo, -c / cj)
-        elif cj < -_EPS:
+        elif cj < -EPS:
             hi = min(hi, -c / cj)
-        elif c < -_EPS or (c <= _EPS and nn > 0.0 and j < k):
+        elif c < -EPS or (c <= EPS and nn > 0.0 and j < k):
             return 0.0, 0.0, 0.0, tx, ty  # hidden by a parallel (or duplicate) plane
-    s, w, wt = _segment2(kid, d, lo, hi)
+    s, w, wt = segment2(kid, d, lo, hi)
     return s, w, wt, tx, ty
 
 
@@ -153,7 +153,7 @@ def _edge_prim3(kid, pc, d, p, t):
 
 
 @njit(cache=True)
-def _edge3(kid, d, p, lo, hi):
+def edge3(kid, d, p, lo, hi):
     """Part inside the support disc of the signed triangle (foot, edge t in [lo, hi]).
 
     Face at distance d, edge line at signed in-plane distance p (> 0: foot on the inner
@@ -204,7 +204,7 @@ def _constraint3(j, k, x0, x1, x2, normals, offsets, h, e1, e2, d):
     c = max(dj, 0.0) - d * nn  # d_j at the foot point
     na = math.sqrt(ax * ax + ay * ay)
     if na < 1e-10:
-        if c < -_EPS or (c <= _EPS and nn > 0.0 and j < k):
+        if c < -EPS or (c <= EPS and nn > 0.0 and j < k):
             return 0.0, 0.0, 0.0, 2
         return 0.0, 0.0, 0.0, 1
     return ax / na, ay / na, -c / na, 0
@@ -225,7 +225,7 @@ def plane_basis(n0, n1, n2):
 
 
 @njit(cache=True)
-def _face3(kid, x0, x1, x2, normals, offsets, h, k, d):
+def face3(kid, x0, x1, x2, normals, offsets, h, k, d):
     """(d int f_s dA, int W dA, in-plane int W y dA (3 components)) of face k, h = 1 units.
 
     The face polygon P (possibly unbounded) is cut by the other planes within 2h. Sum over
@@ -264,17 +264,17 @@ def _face3(kid, x0, x1, x2, normals, offsets, h, k, d):
             cj = bx * tx + by * ty
             aa = bx * ax + by * ay
             rhs = bb - b * aa
-            if cj > _EPS:
+            if cj > EPS:
                 lo = max(lo, rhs / cj)
-            elif cj < -_EPS:
+            elif cj < -EPS:
                 hi = min(hi, rhs / cj)
-            elif rhs > _EPS or (rhs >= -_EPS and aa > 0.0 and j < i):
+            elif rhs > EPS or (rhs >= -EPS and aa > 0.0 and j < i):
                 lo = np.inf  # parallel line in front, or duplicate edge
         if hi <= lo:
             continue
         p = -b
-        p = max(p, _EPS) if p >= 0.0 else min(p, -_EPS)  # foot on the line counts as inside
-        es, ew, eq, ephi = _edge3(kid, d, p, lo, hi)
+        p = max(p, EPS) if p >= 0.0 else min(p, -EPS)  # foot on the line counts as inside
+        es, ew, eq, ephi = edge3(kid, d, p, lo, hi)
         s += es
         w += ew
         phi += ephi
@@ -292,8 +292,8 @@ def sector(kid, d, inside, phi, s, w):
     2 pi [foot in the polygon] - phi (phi the edges' in-disc angles), integrand the
     constant Phi(2h) = Psi(2) - Psi(d), and the -Psi(d) phi terms of its edges."""
     arc = 2.0 * math.pi * inside - phi
-    dps_d = _lval(PS, kid, 1, d, 1)
-    psw_d = _lval(PW, kid, 1, d, 0)
+    dps_d = lval(PS, kid, 1, d, 1)
+    psw_d = lval(PW, kid, 1, d, 0)
     s += (d * PS2_[kid] - dps_d) * arc - dps_d * phi
     w += (PW2[kid, 1] - psw_d) * arc - psw_d * phi
     return s, w

@@ -26,8 +26,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from .facewalls import _add_terms, point_terms
-from .normals import _add_direction, set_projector
+from .facewalls import add_terms, point_terms
+from .normals import add_direction, set_projector
 
 GRID_SHIFT = 0.381966  # (3 - sqrt 5) / 2 of a spacing
 NV = 14  # per node: s, G (3), T g (3), the faces' projector (00 01 02 11 12 22), faces within 2h (0 or 1)
@@ -147,16 +147,16 @@ def table_wall_terms(pos, lo, inv, shape, tab, full, share, grad, hydro, fill, q
         near = tab[((int(u0 + 0.5)) * shape[1] + int(u1 + 0.5)) * shape[2] + int(u2 + 0.5)]
         if s <= 0.0 and near[13] == 0.0:
             continue
-        _add_terms(i, dim, s, g0, g1, g2, t0, t1, t2, full, share, grad, hydro, fill)
+        add_terms(i, dim, s, g0, g1, g2, t0, t1, t2, full, share, grad, hydro, fill)
         if near[13] == 0.0:
             continue
         basis = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         count = 0
         for a in range(dim):  # what the planes put in q, then the faces' directions
-            basis, count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a], q[i, 2, a] if dim == 3 else 0.0)
+            basis, count = add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a], q[i, 2, a] if dim == 3 else 0.0)
         for a in range(dim):
             c0 = near[7 + a] if a == 0 else (near[8] if a == 1 else near[9])  # row a of the faces' projector
             c1 = near[8] if a == 0 else (near[10] if a == 1 else near[11])
             c2 = near[9] if a == 0 else (near[11] if a == 1 else near[12])
-            basis, count = _add_direction(basis, count, dim, c0, c1, c2)
+            basis, count = add_direction(basis, count, dim, c0, c1, c2)
         set_projector(q[i], dim, basis, count)

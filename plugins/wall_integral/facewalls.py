@@ -24,7 +24,7 @@ from numba import njit, prange
 from sphcore.api import box_cells, nearest_point
 
 from .meshfaces import face_part
-from .normals import _add_direction, set_projector
+from .normals import add_direction, set_projector
 from .share import add_face, add_terms_to
 
 
@@ -49,12 +49,12 @@ def face_wall_terms(pos, verts, glo, ginv, gshape, gstart, gitems, stamps, epoch
                 kernel_id, h, gravity, q[i])
             if near == 0:
                 continue
-            _add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill)
+            add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill)
             set_projector(q[i], dim, basis, count)
 
 
 @njit(cache=True, inline="always")
-def _add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill):
+def add_terms(i, dim, s, gr0, gr1, gr2, t0, t1, t2, full, share, grad, hydro, fill):
     """share, grad, hydro of particle i += the faces' s, G, T g; its fill reference loses s."""
     add_terms_to(i, dim, s, gr0, gr1, gr2, t0, t1, t2, share, grad, hydro)
     ref = fill[i] if fill[i] > 0.0 else full
@@ -98,14 +98,14 @@ def point_terms(x0, x1, x2, dim, verts, glo, ginv, gshape, gstart, gitems, stamp
                         continue
                     if near == 0:  # what the planes (or another plugin) put in q
                         for a in range(dim):
-                            basis, count = _add_direction(basis, count, dim, q0[0, a], q0[1, a],
+                            basis, count = add_direction(basis, count, dim, q0[0, a], q0[1, a],
                                                           q0[2, a] if dim == 3 else 0.0)
                     near += 1
                     fs, fw, m0, m1, m2, n0, n1, n2, d = face_part(kernel_id, x0, x1, x2, verts, f, h)
                     s, gr0, gr1, gr2, t0, t1, t2 = add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0,
                                                             m1, m2, n0, n1, n2, d, h, g0, g1, g2)
                     if dist > 0.0:
-                        basis, count = _add_direction(basis, count, dim, (x0 - qx) / dist,
+                        basis, count = add_direction(basis, count, dim, (x0 - qx) / dist,
                                                       (x1 - qy) / dist, (x2 - qz) / dist)
     return near, s, gr0, gr1, gr2, t0, t1, t2, basis, count
 

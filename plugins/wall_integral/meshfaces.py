@@ -13,9 +13,9 @@ a face seen from behind (x on its solid side's plane, beyond its edges) enters w
 d_f < 0. The integrand vanishes beyond r = 2h, so only faces within 2h count, and the sum
 is exact for any polyhedral O: concave corners, obstacles standing on a plane wall (the
 shared face cancels against the plane's; volumes add) and meshes. Each face is a segment
-(2D: ``faces._segment2`` over its extent along the line) or a triangle (3D: the signed
-triangles (foot point, edge) of ``faces._edge3`` over its three edges, plus the polar
-sector when the foot point lies on the triangle, exactly as ``faces._face3`` does for a
+(2D: ``faces.segment2`` over its extent along the line) or a triangle (3D: the signed
+triangles (foot point, edge) of ``faces.edge3`` over its three edges, plus the polar
+sector when the foot point lies on the triangle, exactly as ``faces.face3`` does for a
 clipped plane). The integrals depend on |d_f| and on the face's extent in its plane;
 the sign of d_f multiplies s and enters T g.
 """
@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .faces import _EPS, _edge3, _segment2, plane_basis, sector
+from .faces import EPS, edge3, plane_basis, sector, segment2
 from .share import add_face
 
 
@@ -43,7 +43,7 @@ def segment_terms(kid, x0, x1, verts, f, h):
     d = (n0 * (x0 - p0) + n1 * (x1 - p1)) / h
     lo = (t0 * (p0 - x0) + t1 * (p1 - x1)) / h
     hi = lo + ln / h
-    s, w, wt = _segment2(kid, abs(d), lo, hi)
+    s, w, wt = segment2(kid, abs(d), lo, hi)
     return (s if d >= 0.0 else -s), w, wt, t0, t1, n0, n1, d
 
 
@@ -98,8 +98,8 @@ def triangle_terms(kid, x0, x1, x2, verts, f, h):
         lo = tx * pj0 + ty * pj1
         hi = tx * pk0 + ty * pk1
         p = -b
-        p = max(p, _EPS) if p >= 0.0 else min(p, -_EPS)  # foot on the line counts as inside
-        es, ew, eq, ephi = _edge3(kid, ad, p, lo, hi)
+        p = max(p, EPS) if p >= 0.0 else min(p, -EPS)  # foot on the line counts as inside
+        es, ew, eq, ephi = edge3(kid, ad, p, lo, hi)
         s += es
         w += ew
         phi += ephi

@@ -16,7 +16,7 @@ TOL = 1e-6  # a normal within this (squared) of the span already held adds no di
 
 
 @njit(cache=True, inline="always")
-def _add_direction(basis, count, dim, v0, v1, v2):
+def add_direction(basis, count, dim, v0, v1, v2):
     """Gram-Schmidt: add (v0, v1, v2) to the orthonormal basis (a 9-tuple of three rows, the
     first ``count`` in use); returns (basis, count). Tuples, so no allocation per particle."""
     for b in range(count):
@@ -51,11 +51,11 @@ def project_one(i, pos, normals, offsets, support, q):
     basis = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     count = 0
     for a in range(dim):  # what another wall plugin put there: its columns span its walls
-        basis, count = _add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a],
+        basis, count = add_direction(basis, count, dim, q[i, 0, a], q[i, 1, a],
                                       q[i, 2, a] if dim == 3 else 0.0)
     for k in range(normals.shape[0]):
         if particle_distance(normals, offsets, k, pos, i) < support:
-            basis, count = _add_direction(basis, count, dim, normals[k, 0], normals[k, 1],
+            basis, count = add_direction(basis, count, dim, normals[k, 0], normals[k, 1],
                                           normals[k, 2] if dim == 3 else 0.0)
     set_projector(q[i], dim, basis, count)
 
@@ -63,7 +63,7 @@ def project_one(i, pos, normals, offsets, support, q):
 @njit(cache=True, inline="always")
 def set_projector(qi, dim, basis, count):
     """qi (dim, dim) <- the projector onto the span of the first ``count`` rows of ``basis``
-    (orthonormal rows of 3, from :func:`_add_direction`)."""
+    (orthonormal rows of 3, from :func:`add_direction`)."""
     for a in range(dim):
         for b in range(dim):
             acc = 0.0

@@ -29,7 +29,7 @@ from numba import njit, prange
 
 from sphcore.api import particle_distance, plane_distance
 
-from .faces import PS2_, _face2, _face3, _lval, _segment2
+from .faces import PS2_, face2, face3, lval, segment2
 from .tables import PS, PW, PW2
 
 # ---------------------------------------------------------------- single plane
@@ -46,10 +46,10 @@ def plane_exact(kid, dim, z):
     if z >= 2.0:
         return 0.0, 0.0
     if dim == 2:
-        sz, wz, _ = _segment2(kid, z, -np.inf, np.inf)
+        sz, wz, _ = segment2(kid, z, -np.inf, np.inf)
         return sz, wz
-    return (2.0 * math.pi * (z * PS2_[kid] - _lval(PS, kid, 1, z, 1)),
-            2.0 * math.pi * (PW2[kid, 1] - _lval(PW, kid, 1, z, 0)))
+    return (2.0 * math.pi * (z * PS2_[kid] - lval(PS, kid, 1, z, 1)),
+            2.0 * math.pi * (PW2[kid, 1] - lval(PW, kid, 1, z, 0)))
 
 
 @njit(cache=True)
@@ -171,11 +171,11 @@ def _point_core(x0, x1, x2, normals, offsets, kernel_id, h, g0, g1, g2):
         if nact == 1:  # one plane: tabulated S(z), Wbar(z); no in-plane moment by symmetry
             fs, fw = _plane_lookup(kernel_id, dim - 2, d)
         elif dim == 2:
-            fs, fw, fwt, tx, ty = _face2(kernel_id, x0, x1, normals, offsets, h, k, d)
+            fs, fw, fwt, tx, ty = face2(kernel_id, x0, x1, normals, offsets, h, k, d)
             m0 = fwt * tx
             m1 = fwt * ty
         else:
-            fs, fw, m0, m1, m2 = _face3(kernel_id, x0, x1, x2, normals, offsets, h, k, d)
+            fs, fw, m0, m1, m2 = face3(kernel_id, x0, x1, x2, normals, offsets, h, k, d)
         s, gr0, gr1, gr2, t0, t1, t2 = add_face(s, gr0, gr1, gr2, t0, t1, t2, fs, fw, m0, m1, m2,
                                                 n0, n1, n2, d, h, g0, g1, g2)
     return s, gr0, gr1, gr2, t0, t1, t2

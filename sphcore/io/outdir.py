@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 from sphcore.errors import CaseError, OutputError
+from sphcore.io.atomic import temporary_name, write_text_atomically
 
 MARKER = ".sphcore-output"
 
@@ -42,30 +43,6 @@ def resolve(case, output=None) -> Path:
         raise CaseError(case.file, "output.dir", f"expected a sub-directory of the case directory, got {rel!r} "
                         "(write elsewhere with --output DIR)")
     return case.dir / norm
-
-
-# -- atomic writes ---------------------------------------------------------------------------
-
-def write_atomically(path: Path, write) -> None:
-    """``write(tmp_path)``, fsync, then rename over ``path``: a reader (or a crash, a full
-    disk) sees the old file or the new one, never half of one. Raises OutputError."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        write(tmp)
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except OSError as e:
-        try:
-            tmp.unlink(missing_ok=True)
-        except OSError:
-            pass
-        raise OutputError(f"cannot write {path}: {e.strerror or e}") from e
-
-
-def write_text_atomically(path: Path, text: str) -> None:
-    write_atomically(path, lambda tmp: Path(tmp).write_text(text))
 
 
 # -- the marker and manifest ---------------------------------------------------------------
@@ -188,7 +165,8 @@ def _remove_stale_temporaries(out: Path, marker: dict | None) -> None:
         p = _inside(out, rel) if isinstance(rel, str) else None
         if p is None:
             continue
-        for tmp in (p.with_name(f".{p.name}.tmp"), p.with_suffix(".tmp.npz") if p.suffix == ".npz" else None):
+        # the second: the checkpoint's temporary name before every write went through sphcore.io.atomic
+        for tmp in (temporary_name(p), p.with_suffix(".tmp.npz") if p.suffix == ".npz" else None):
             if tmp is not None and tmp.is_file() and not tmp.is_symlink():
                 try:
                     tmp.unlink()

@@ -2,7 +2,7 @@
 
 numba keys each cached function on its own source file only. Code it compiled into that
 function from another module (a call, or ``inline="always"``, such as
-:func:`sphcore.physics.wall_completion._complete_at_wall` inside the pair loop of
+:func:`sphcore.physics.wall_completion.complete_at_wall` inside the pair loop of
 :mod:`sphcore.physics.equations`) is not checked: after an edit of the callee's file the caller's
 cache keeps the old machine code, silently. Measured 2026-11-24: an edit of
 ``wall_completion.py`` had no effect on a run until ``equations.py`` was touched.

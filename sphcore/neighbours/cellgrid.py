@@ -48,9 +48,9 @@ from sphcore.neighbours.cellkeys import (
     MAX_AXIS_CELLS,
     MAX_SLABS,
     PARALLEL_CELLS,
-    _build,
-    _table_parallel,
-    _table_serial,
+    build_cells,
+    neighbour_table_parallel,
+    neighbour_table_serial,
 )
 
 REACH = 1  # cells per search radius: cells of side 2h for the 2h support, a 3^dim stencil
@@ -259,7 +259,7 @@ class CellGrid:
                                                           (self._key, self._order, self._tmp, self._pcell))
         self._cell_key, self._start = _grow(self._cell_key, n + 1), _grow(self._start, n + 1)
         ncell, axes = self._ncell[:dim], self._axes[:dim]
-        m, nslab = _build(pos, self.cell_size, self.reach, self.lo, ncell, axes, self._key[:n], self._order[:n],
+        m, nslab = build_cells(pos, self.cell_size, self.reach, self.lo, ncell, axes, self._key[:n], self._order[:n],
                           self._tmp[:n], self._count, self._pcell[:n], self._cell_key, self._start, self._slab)
         if m == -2:
             raise OverflowError("non-finite particle positions")
@@ -270,7 +270,7 @@ class CellGrid:
         # the table has one row per occupied cell (about n / 7 in 2D, n / 18 in 3D at h = 1.3 dx)
         self._nbr = _grow(self._nbr, m, ((2 * self.reach + 1) ** dim,))
         self.cell_key, self.cell_start, self.nbr = self._cell_key[:m], self._start[:m + 1], self._nbr[:m]
-        (_table_parallel if m > PARALLEL_CELLS else _table_serial)(self.cell_key, m, ncell, dim, self.reach, self.nbr)
+        (neighbour_table_parallel if m > PARALLEL_CELLS else neighbour_table_serial)(self.cell_key, m, ncell, dim, self.reach, self.nbr)
         self.slab_start = self._slab[:nslab + 1]
         self.view = Grid(self.order, self.cell_start, self.pcell, self.nbr, self.slab_start, *self._no_list)
         return self

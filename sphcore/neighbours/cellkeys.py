@@ -181,7 +181,7 @@ def _neighbour_table(cell_key, m, ncell, dim, reach, nbr):
                         nbr[c, row * w + off + reach] = p
 
 
-_table_serial, _table_parallel = serial_and_parallel(_neighbour_table)
+neighbour_table_serial, neighbour_table_parallel = serial_and_parallel(_neighbour_table)
 
 
 @njit(cache=True)
@@ -213,7 +213,7 @@ def _slabs(cell_key, cell_start, m, layer_cells, reach, nslab_max, slab_start):
 
 
 @njit(cache=True)
-def _build(pos, cell_size, reach, lo, ncell, axes, key, order, tmp, count, pcell, cell_key, cell_start, slab):
+def build_cells(pos, cell_size, reach, lo, ncell, axes, key, order, tmp, count, pcell, cell_key, cell_start, slab):
     """The whole build but the neighbour table; returns (m, nslab), or
     (-1, axis cells) when the particles spread over MAX_AXIS_CELLS or more cells along an
     axis, (-2, 0) for non-finite positions. ``lo`` (3,), ``ncell`` and ``axes`` (dim,) out."""

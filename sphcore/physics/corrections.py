@@ -1,7 +1,7 @@
 """Kernel corrections computed from per-particle neighbour sums.
 
 - the Bonet & Lok (1999) gradient correction matrix L_i, applied to a pair symmetrised
-  as (L_i + L_j)/2 (:func:`_corrected`, used by :func:`sphcore.physics.equations.sph_rates`);
+  as (L_i + L_j)/2 (:func:`corrected_gradient`, used by :func:`sphcore.physics.equations.sph_rates`);
 - the Shepard-filtered density (Chen et al. 1999, CSPH zeroth order).
 
 Both walk the neighbours of each particle (:mod:`sphcore.neighbours.cellgrid`), one particle per
@@ -18,7 +18,7 @@ from sphcore.physics.kernels import kernel_f, kernel_w
 
 
 @njit(cache=True)
-def _corrected(L, n_L, i, j, g0, g1, g2):
+def corrected_gradient(L, n_L, i, j, g0, g1, g2):
     """(L_i + L_j)/2 applied to the gradient; L is the identity for rows >= n_L (ghosts)."""
     a0, a1, a2 = _apply(L, n_L, i, g0, g1, g2)
     b0, b1, b2 = _apply(L, n_L, j, g0, g1, g2)

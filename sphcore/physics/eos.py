@@ -29,7 +29,7 @@ def tait_b(c0, rho0, gamma):
 
 
 @njit(cache=True, inline="always")
-def _power(x, gamma):
+def tait_power(x, gamma):
     """x^gamma; for the usual gamma = 7 four multiplications instead of libm's pow (which
     costs ~8x more; the two differ by a few units in the last place)."""
     if gamma == 7.0:
@@ -41,7 +41,7 @@ def _power(x, gamma):
 @njit(cache=True, inline="always")
 def pressure(rho, rho0, b, gamma, p_background):
     """p(rho) (Pa) for one density (kg/m^3); b from :func:`tait_b`."""
-    return b * (_power(rho / rho0, gamma) - 1.0) + p_background
+    return b * (tait_power(rho / rho0, gamma) - 1.0) + p_background
 
 
 @njit(cache=True, inline="always")

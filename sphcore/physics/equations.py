@@ -29,7 +29,7 @@ v_ij = v_i - v_j, grad_i W_ij = F_ij x_ij (see :mod:`sphcore.physics.kernels`):
   with G_w the wall gradient the plugin supplies (the exact G corrected for the lattice
   error of the truncated sum) and A_w g the discrete complement of the particle's own first
   moment along the walls' normals, lambda (T g + s g) along them; see
-  :func:`sphcore.physics.wall_completion._complete_at_wall`.
+  :func:`sphcore.physics.wall_completion.complete_at_wall`.
 - Tait equation of state: :mod:`sphcore.physics.eos`.
 
 eta^2 = 0.01 h^2 keeps the denominators finite. Arguments are structured: ``src``
@@ -46,24 +46,12 @@ from numba import njit, prange
 
 from sphcore.jit.parallel import PARALLEL_MIN, twin
 from sphcore.neighbours.cellgrid import candidates_bound, forward_pairs, forward_rows, listed_pairs
-from sphcore.physics.eos import _power
+from sphcore.physics.eos import tait_power
 from sphcore.physics.pairterms import GATHER_ROWS, OUT_ROWS, constants, fused_partners, gather, scatter, terms
-from sphcore.physics.wall_completion import _complete_at_wall
+from sphcore.physics.wall_completion import complete_at_wall
 
 PAIRS_PARALLEL_MIN = 1000  # particles: the pair loop runs serial below (one thread is faster)
 WORK_COLUMNS = 9  # per-source scratch of sph_rates: see its docstring
-
-
-class Fields(NamedTuple):
-    """Source particles of one force evaluation: the fluid first, then plugin sources.
-    pos, vel (n, dim) m and m/s; rho (kg/m^3), p (Pa, the pressure the momentum equation
-    uses), m (kg): (n,)."""
-
-    pos: np.ndarray
-    vel: np.ndarray
-    rho: np.ndarray
-    p: np.ndarray
-    m: np.ndarray
 
 
 class WallTerms(NamedTuple):
@@ -209,7 +197,7 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
         work[i, 7] = src.m[i] / rho_i
         if prm.diffusion_hydrostatic:  # k/2 and g . x_i: psi_ij's hydrostatic part (k_i + k_j)/2 g . x_ij
             x = rho_i / prm.rho0  # k = rho / c^2(rho) = (rho0 / c0^2) x^(2 - gamma), no pow for gamma = 7
-            work[i, 6] = 0.5 * prm.rho0 / (prm.c0 * prm.c0) * (x * x / _power(x, prm.gamma))
+            work[i, 6] = 0.5 * prm.rho0 / (prm.c0 * prm.c0) * (x * x / tait_power(x, prm.gamma))
             gp = 0.0
             for d in range(dim):
                 gp += prm.gravity[d] * src.pos[i, d]
@@ -276,7 +264,7 @@ def _finish(i, dim, walls, src, prm, wall, acc, drho, work):
     a2 = acc[i, 2] if dim == 3 else 0.0
     dr = drho[i]
     if walls and wall.share[i] > 0.0:
-        a0, a1, a2, dr = _complete_at_wall(wall, i, dim, src.vel, rho[i], src.p[i], prm.rho_ref, prm.moment_norm,
+        a0, a1, a2, dr = complete_at_wall(wall, i, dim, src.vel, rho[i], src.p[i], prm.rho_ref, prm.moment_norm,
                                            gravity, a0, a1, a2, dr, work[i, 1], work[i, 2], work[i, 3], work[i, 0])
     gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
     acc[i, 0] = gscale * gravity[0] + a0

@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from sphcore.physics.corrections import _corrected
+from sphcore.physics.corrections import corrected_gradient
 from sphcore.physics.kernels import kernel_f_of_q, kernel_f_scale, kernel_w
 
 # rows of the three-pass scratch ``gat``: what the pairs read of each partner j (x_ij and
@@ -188,7 +188,7 @@ def fused_partners(i, npart, buf, n_dest, dim, walls, pos, vel, rho, m, kid, gv0
         g1 = f * x1
         g2 = f * x2
         if n_L > 0:
-            g0, g1, g2 = _corrected(L, n_L, i, j, g0, g1, g2)
+            g0, g1, g2 = corrected_gradient(L, n_L, i, j, g0, g1, g2)
         v0 = vi0 - vel[j, 0]
         v1 = vi1 - vel[j, 1]
         v2 = vi2 - vel[j, 2] if dim == 3 else 0.0
@@ -273,7 +273,7 @@ def terms(npart, dim, walls, kid, k, rho_i, m_i, pi_r, vol_i, kh_i, gp_i, use_L,
         g0 = f * x0
         g1 = f * x1
         g2 = f * x2
-        if use_L:  # (L_i + L_j) / 2 applied to g, as sphcore.physics.corrections._corrected
+        if use_L:  # (L_i + L_j) / 2 applied to g, as sphcore.physics.corrections.corrected_gradient
             a0, a1, a2 = g0, g1, g2
             if Li.shape[0] == 9:
                 a0 = Li[0] * g0 + Li[1] * g1 + Li[2] * g2

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numpy as np
 
@@ -69,9 +70,11 @@ class ParticleState:
                    np.zeros(0, np.int8), np.zeros(0, np.int64))
 
 
-@dataclass
-class Sources:
-    """Neighbour-only particles a plugin adds to a force evaluation (e.g. ghosts)."""
+class Fields(NamedTuple):
+    """The fields the pair sums read of source particles: pos, vel (n, dim) in m and m/s;
+    rho (kg/m^3), p (Pa, the pressure the momentum equation uses), m (kg): (n,). One force
+    evaluation's sources are the fluid first, then what plugins add; a named tuple, so that
+    it is one argument to a numba kernel."""
 
     pos: np.ndarray
     vel: np.ndarray
@@ -82,6 +85,11 @@ class Sources:
     @property
     def n(self) -> int:
         return self.pos.shape[0]
+
+
+#: neighbour-only particles a plugin adds to a force evaluation (``sph_extra_sources``, e.g.
+#: ghosts): the same five fields
+Sources = Fields
 
 
 def lattice(lo, hi, dx: float, count=None) -> np.ndarray:

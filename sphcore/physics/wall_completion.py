@@ -1,6 +1,6 @@
 """The wall completion of a particle's SPH sums: what boundary-integral walls add to the
 rates once the pair loop (:func:`sphcore.physics.equations.sph_rates`) has summed the particle's
-neighbours. The terms and their derivation are in :func:`_complete_at_wall`; the plugins
+neighbours. The terms and their derivation are in :func:`complete_at_wall`; the plugins
 supply them through :class:`sphcore.physics.equations.WallTerms`.
 """
 
@@ -10,7 +10,7 @@ from numba import njit
 
 
 @njit(cache=True, inline="always")
-def _complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam):
+def complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam):
     """Add the wall's boundary integrals to particle i's sums (module docstring).
 
     The wall stands for the missing part of the support, filled with the mirror image of

@@ -4,20 +4,20 @@ Saved: the run state (:meth:`sphcore.run.state.RunState.payload`: every particle
 (float64 as is), the rates of the current state, which the leapfrog reuses at the start of
 the next step, the pair-list anchor, t, step, dt, the plugins' figures and kept state), the
 validated case and the run's identity. The file is written to a temporary name and renamed,
-so a crash mid-write keeps the previous one; a restart reads it back with :func:`read` and
+so a crash mid-write keeps the previous one (:mod:`sphcore.io.atomic`); a restart reads it back with :func:`read` and
 :meth:`sphcore.run.state.RunState.load_payload`.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from sphcore.errors import CaseError, OutputError
+from sphcore.errors import CaseError
+from sphcore.io.atomic import write_atomically
 from sphcore.run import resume
 
 NAME = "checkpoint.npz"
@@ -27,22 +27,15 @@ def save(sim, directory: Path, extra: dict | None = None) -> Path:
     """Write the checkpoint; ``extra`` (the run's identity and history, see
     :mod:`sphcore.run.resume`) goes into its metadata."""
     path = Path(directory) / NAME
-    tmp = path.with_suffix(".tmp.npz")
     meta, arrays = sim.run.payload()
     meta["config"] = resume.config_json(sim.case.config)
     meta.update(extra or {})
-    try:
-        with open(tmp, "wb") as f:
+
+    def write(tmp):
+        with open(tmp, "wb") as f:  # a file object: np.savez would add ".npz" to a name
             np.savez(f, meta=np.array(json.dumps(meta, default=float)), **arrays)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except OSError as e:
-        try:  # a full disk: drop the partial file, the previous checkpoint stays
-            tmp.unlink(missing_ok=True)
-        except OSError:
-            pass
-        raise OutputError(f"cannot write checkpoint {path}: {e.strerror or e}") from e
+
+    write_atomically(path, write, what="the checkpoint")
     return path
 
 

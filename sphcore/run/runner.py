@@ -23,6 +23,7 @@ from sphcore.case.model import apply_overrides, case_file, parse_override, read_
 from sphcore.case.overrides import key_text
 from sphcore.errors import CaseError, Instability, OutputError
 from sphcore.io import outdir
+from sphcore.io.atomic import write_text_atomically
 from sphcore.jit import prepare
 from sphcore.plugin import pluginhost
 from sphcore.run import budget, checkpoint, relax, resume, threads
@@ -135,7 +136,7 @@ def _jsonable(o):
 
 
 def _write_json(path: Path, data: dict):
-    outdir.write_text_atomically(path, json.dumps(data, indent=2, default=_jsonable) + "\n")
+    write_text_atomically(path, json.dumps(data, indent=2, default=_jsonable) + "\n")
 
 
 def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restart=False, progress=None,
