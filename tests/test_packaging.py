@@ -3,6 +3,7 @@ install must run everything an editable one runs (``sph sweep`` included)."""
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -23,7 +24,15 @@ def _tracked(folder: str) -> list[Path]:
 
 
 def test_the_wheel_holds_every_module_and_data_file(tmp_path):
-    built = subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "-q", "-w", str(tmp_path)],
+    # built from a copy of the tracked files, so that the build leaves nothing in the checkout
+    src = tmp_path / "src"
+    for folder in ("sphcore", "plugins"):
+        for p in _tracked(folder):
+            (src / p.relative_to(ROOT)).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(p, src / p.relative_to(ROOT))
+    for name in ("pyproject.toml", "setup.py", "README.md"):
+        shutil.copy2(ROOT / name, src / name)
+    built = subprocess.run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps", "-q", "-w", str(tmp_path)],
                            capture_output=True, text=True)
     assert built.returncode == 0, built.stderr[-2000:]
     (wheel,) = tmp_path.glob("sphcore-*.whl")
