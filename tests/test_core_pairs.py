@@ -18,8 +18,9 @@ from core_cases import BLOB
 
 from sphcore.neighbours.cellgrid import CellGrid
 from sphcore.physics.corrections import neighbour_sums
-from sphcore.physics.equations import PAIRS_PARALLEL_MIN, WORK_COLUMNS, WallTerms, sph_rates
+from sphcore.physics.equations import PAIRS_PARALLEL_MIN, WallTerms, sph_rates
 from sphcore.physics.kernels import kernel_f, kernel_w
+from sphcore.physics.pairterms import WORK_COLUMNS
 from sphcore.physics.particles import Fields
 from sphcore.physics.wall_completion import complete_at_wall
 

@@ -19,7 +19,8 @@ from conftest import make_sim, write_case
 from core_cases import BLOB
 
 from sphcore.neighbours.cellgrid import CellGrid
-from sphcore.physics.equations import WORK_COLUMNS, WallTerms, sph_rates
+from sphcore.physics.equations import WallTerms, sph_rates
+from sphcore.physics.pairterms import WORK_COLUMNS
 from sphcore.physics.particles import Fields
 
 

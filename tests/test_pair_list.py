@@ -16,7 +16,8 @@ from hypothesis import strategies as st
 
 from sphcore.neighbours.cellgrid import CellGrid, neighbour_pairs
 from sphcore.neighbours.pairlist import PairList
-from sphcore.physics.equations import WORK_COLUMNS, WallTerms, sph_rates
+from sphcore.physics.equations import WallTerms, sph_rates
+from sphcore.physics.pairterms import WORK_COLUMNS
 from sphcore.physics.particles import Fields
 from sphcore.run import runner
 

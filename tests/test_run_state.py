@@ -4,8 +4,8 @@ and a checkpoint's payload read back is the same state."""
 from __future__ import annotations
 
 import numpy as np
-
 from conftest import GOOD_CASE, by_id, make_sim, write_case
+
 from sphcore.run.state import RunState
 
 # a dam-break column with walls, kept pair lists, density diffusion and a plugin that

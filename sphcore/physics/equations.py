@@ -47,11 +47,25 @@ from numba import njit, prange
 from sphcore.jit.parallel import PARALLEL_MIN, twin
 from sphcore.neighbours.cellgrid import candidates_bound, forward_pairs, forward_rows, listed_pairs
 from sphcore.physics.eos import tait_power
-from sphcore.physics.pairterms import GATHER_ROWS, OUT_ROWS, constants, fused_partners, gather, scatter, terms
+from sphcore.physics.pairterms import (
+    GATHER_ROWS,
+    OUT_ROWS,
+    W_B,
+    W_GAMMA,
+    W_GP,
+    W_INV_RHO,
+    W_KH,
+    W_PR,
+    W_VOL,
+    constants,
+    fused_partners,
+    gather,
+    scatter,
+    terms,
+)
 from sphcore.physics.wall_completion import complete_at_wall
 
 PAIRS_PARALLEL_MIN = 1000  # particles: the pair loop runs serial below (one thread is faster)
-WORK_COLUMNS = 9  # per-source scratch of sph_rates: see its docstring
 
 
 class WallTerms(NamedTuple):
@@ -191,17 +205,17 @@ def _prepare(i, n_dest, dim, src, order, prm, acc, drho, work, spos):
         drho[i] = 0.0
     for d in range(4):
         work[i, d] = 0.0
-    work[i, 4] = src.p[i] / (rho_i * rho_i)
-    work[i, 5] = 1.0 / rho_i
+    work[i, W_PR] = src.p[i] / (rho_i * rho_i)
+    work[i, W_INV_RHO] = 1.0 / rho_i
     if prm.delta > 0.0:
-        work[i, 7] = src.m[i] / rho_i
+        work[i, W_VOL] = src.m[i] / rho_i
         if prm.diffusion_hydrostatic:  # k/2 and g . x_i: psi_ij's hydrostatic part (k_i + k_j)/2 g . x_ij
             x = rho_i / prm.rho0  # k = rho / c^2(rho) = (rho0 / c0^2) x^(2 - gamma), no pow for gamma = 7
-            work[i, 6] = 0.5 * prm.rho0 / (prm.c0 * prm.c0) * (x * x / tait_power(x, prm.gamma))
+            work[i, W_KH] = 0.5 * prm.rho0 / (prm.c0 * prm.c0) * (x * x / tait_power(x, prm.gamma))
             gp = 0.0
             for d in range(dim):
                 gp += prm.gravity[d] * src.pos[i, d]
-            work[i, 8] = gp
+            work[i, W_GP] = gp
 
 
 def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work, spos, buf, rows, gat, out):
@@ -241,7 +255,7 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
                                share, acc, drho, work)
                 continue
             gather(i, npart, buf, dim, pos, vel, rho, m, work, consts, L, n_L, gat)
-            pr_i, vol_i, kh_i, gp_i = work[i, 4], work[i, 7], work[i, 6], work[i, 8]
+            pr_i, vol_i, kh_i, gp_i = work[i, W_PR], work[i, W_VOL], work[i, W_KH], work[i, W_GP]
             # with the correction and without: the compiler vectorises the second loop only
             # when the correction's loads are not in it
             if n_L > 0:
@@ -265,7 +279,7 @@ def _finish(i, dim, walls, src, prm, wall, acc, drho, work):
     dr = drho[i]
     if walls and wall.share[i] > 0.0:
         a0, a1, a2, dr = complete_at_wall(wall, i, dim, src.vel, rho[i], src.p[i], prm.rho_ref, prm.moment_norm,
-                                           gravity, a0, a1, a2, dr, work[i, 1], work[i, 2], work[i, 3], work[i, 0])
+                                           gravity, a0, a1, a2, dr, work[i, W_B], work[i, W_B + 1], work[i, W_B + 2], work[i, W_GAMMA])
     gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
     acc[i, 0] = gscale * gravity[0] + a0
     acc[i, 1] = gscale * gravity[1] + a1

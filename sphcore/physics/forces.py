@@ -19,7 +19,8 @@ from sphcore.neighbours.cellgrid import CellGrid
 from sphcore.neighbours.pairlist import PairList
 from sphcore.physics import eos
 from sphcore.physics.corrections import neighbour_sums
-from sphcore.physics.equations import WORK_COLUMNS, WallTerms, sph_rates, uniform_acceleration
+from sphcore.physics.equations import WallTerms, sph_rates, uniform_acceleration
+from sphcore.physics.pairterms import WORK_COLUMNS
 from sphcore.physics.particles import Fields
 
 

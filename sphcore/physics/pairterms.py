@@ -36,6 +36,16 @@ from sphcore.physics.kernels import kernel_f_of_q, kernel_f_scale, kernel_w
 
 # rows of the three-pass scratch ``gat``: what the pairs read of each partner j (x_ij and
 # v_ij rather than x_j and v_j: each pair needs the differences)
+# the pair loop's per-source scratch (``work``, n_sources x WORK_COLUMNS), filled before the pairs
+W_GAMMA = 0  # near-wall sum of the kernel, sum_j V_j W_ij (the wall completion's gamma)
+W_B = 1  # near-wall sums of V_j (x_ij . g) grad W_ij: columns 1-3
+W_PR = 4  # p / rho^2
+W_INV_RHO = 5  # 1 / rho
+W_KH = 6  # density diffusion: k / 2
+W_VOL = 7  # density diffusion: the volume m / rho
+W_GP = 8  # density diffusion: g . x
+WORK_COLUMNS = 9
+
 G_X = 0  # x_ij: rows 0-2
 G_V = 3  # v_ij: rows 3-5
 G_RHO = 6  # rho_j
@@ -126,10 +136,10 @@ def add_to_partner(j, dim, near_j, aj0, aj1, aj2, dr_j, w, gx, g0, g1, g2, vol_i
         acc[j, 2] += aj2
     drho[j] += dr_j
     if near_j:
-        work[j, 0] += vol_i * w
-        work[j, 1] += vol_i * gx * g0
-        work[j, 2] += vol_i * gx * g1
-        work[j, 3] += vol_i * gx * g2
+        work[j, W_GAMMA] += vol_i * w
+        work[j, W_B] += vol_i * gx * g0
+        work[j, W_B + 1] += vol_i * gx * g1
+        work[j, W_B + 2] += vol_i * gx * g2
 
 
 @njit(cache=True, inline="always")
@@ -142,10 +152,10 @@ def finish_particle(i, dim, near_i, acc, drho, work, a0, a1, a2, dr, gam, b0, b1
         acc[i, 2] += a2
     drho[i] += dr
     if near_i:
-        work[i, 0] += gam
-        work[i, 1] += b0
-        work[i, 2] += b1
-        work[i, 3] += b2
+        work[i, W_GAMMA] += gam
+        work[i, W_B] += b0
+        work[i, W_B + 1] += b1
+        work[i, W_B + 2] += b2
 
 
 @njit(cache=True, inline="always")
@@ -160,8 +170,8 @@ def fused_partners(i, npart, buf, n_dest, dim, walls, pos, vel, rho, m, kid, gv0
     di = i < n_dest
     near_i = walls and di and share[i] > 0.0
     rho_i, m_i = rho[i], m[i]
-    pi_r, vol_i, kh_i, gp_i = work[i, 4], work[i, 7], work[i, 6], work[i, 8]
-    vi = m_i * work[i, 5]
+    pi_r, vol_i, kh_i, gp_i = work[i, W_PR], work[i, W_VOL], work[i, W_KH], work[i, W_GP]
+    vi = m_i * work[i, W_INV_RHO]
     # particle i's position and velocity in scalars, loaded once
     px0, px1 = pos[i, 0], pos[i, 1]
     px2 = pos[i, 2] if dim == 3 else 0.0
@@ -194,11 +204,11 @@ def fused_partners(i, npart, buf, n_dest, dim, walls, pos, vel, rho, m, kid, gv0
         v2 = vi2 - vel[j, 2] if dim == 3 else 0.0
         m_j = m[j]
         rho_j = rho[j] if any_visc else 0.0
-        vol_j = work[j, 7] if do_diff else 0.0
-        kh_j = work[j, 6] if diff_h else 0.0
-        gp_j = work[j, 8] if diff_h else 0.0
+        vol_j = work[j, W_VOL] if do_diff else 0.0
+        kh_j = work[j, W_KH] if diff_h else 0.0
+        gp_j = work[j, W_GP] if diff_h else 0.0
         e0, e1, e2, dr_i, dr_j = pair_terms(k, x0, x1, x2, r2, g0, g1, g2, v0, v1, v2, m_i, m_j, rho_i, rho_j, pi_r,
-                                            work[j, 4], vol_i, vol_j, kh_i, kh_j, gp_i, gp_j)
+                                            work[j, W_PR], vol_i, vol_j, kh_i, kh_j, gp_i, gp_j)
         near_j = walls and dj and share[j] > 0.0
         w = 0.0
         gx = 0.0
@@ -211,7 +221,7 @@ def fused_partners(i, npart, buf, n_dest, dim, walls, pos, vel, rho, m, kid, gv0
             a2 -= m_j * e2
             dr += dr_i
             if near_i:
-                vj = m_j * work[j, 5]
+                vj = m_j * work[j, W_INV_RHO]
                 gam += vj * w
                 b0 += vj * gx * g0
                 b1 += vj * gx * g1
@@ -241,12 +251,12 @@ def gather(i, npart, buf, dim, pos, vel, rho, m, work, k, L, n_L, gat):
             gat[G_V + 2, u] = vi2 - vel[j, 2]
         gat[G_RHO, u] = rho[j]
         gat[G_M, u] = m[j]
-        gat[G_PR, u] = work[j, 4]
+        gat[G_PR, u] = work[j, W_PR]
         if do_diff:
-            gat[G_VOL, u] = work[j, 7]
+            gat[G_VOL, u] = work[j, W_VOL]
             if diff_h:
-                gat[G_KH, u] = work[j, 6]
-                gat[G_GP, u] = work[j, 8]
+                gat[G_KH, u] = work[j, W_KH]
+                gat[G_GP, u] = work[j, W_GP]
         if n_L > 0:
             if j < n_L:
                 gat[G_LID, u] = 0.0
@@ -315,7 +325,7 @@ def scatter(i, npart, buf, n_dest, dim, walls, kid, h, gv0, gv1, gv2, share, m_i
     the partners' order; arguments as :func:`fused_partners`'."""
     di = i < n_dest
     near_i = walls and di and share[i] > 0.0
-    vi = m_i * work[i, 5]
+    vi = m_i * work[i, W_INV_RHO]
     a0 = 0.0
     a1 = 0.0
     a2 = 0.0
@@ -347,7 +357,7 @@ def scatter(i, npart, buf, n_dest, dim, walls, kid, h, gv0, gv1, gv2, share, m_i
                 a2 -= out[O_AI + 2, u]
             dr += out[O_DRI, u]
             if near_i:
-                vj = gat[G_M, u] * work[j, 5]
+                vj = gat[G_M, u] * work[j, W_INV_RHO]
                 gam += vj * w
                 b0 += vj * gx * g0
                 b1 += vj * gx * g1
