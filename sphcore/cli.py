@@ -8,6 +8,7 @@ or SIGTERM after writing a checkpoint.
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 
@@ -73,6 +74,15 @@ def _fail(msg, status):
 
 
 def main(argv=None) -> int:
+    try:
+        return _main(argv)
+    except BrokenPipeError:  # `sph options | head`: the reader left; stop quietly, as other tools do
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # Python's own flush at exit must not fail again
+        return 128 + signal.SIGPIPE
+
+
+def _main(argv=None) -> int:
     args = _parser().parse_args(argv)
     prepare()
     if args.command == "sweep":

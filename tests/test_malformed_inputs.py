@@ -158,6 +158,9 @@ SPECIAL = [
     ("output-dir-parent", _edit(output={"dir": "../other"}), []),
     ("output-dir-absolute", _edit(output={"dir": "/tmp/sph-absolute-output"}), []),
     ("output-dir-dot", _edit(output={"dir": "."}), []),
+    ("output-dir-300-bytes", _edit(output={"dir": "a" * 300}), []),
+    ("output-dir-nul", _edit(output={"dir": "a\u0000b"}), []),
+    ("mesh-without-file", to_toml({**GOOD, "domain": {**GOOD["domain"], "walls": [{"shape": "mesh"}]}}).encode(), []),
     ("domain-inverted", _edit(domain={"min": [1.0, 1.0], "max": [0.0, 0.0]}), []),
     # values in range one by one whose physics leaves the float range: found before a step
     ("gravity-1e300", _edit(physics={"gravity": [0.0, -1e300, 0.0]}), []),
@@ -345,3 +348,36 @@ def test_eta_starts_after_the_first_step():
     bar.update(sim)
     eta = float(re.search(r"ETA (\S+) s", stream.getvalue()).group(1))
     assert eta == 0.0  # ~0.05 s to go; counting the 1.2 s of compiling would say >= 1 s
+
+
+def test_a_plane_normal_of_huge_components_is_a_direction(tmp_path, capsys):
+    """A normal is a direction: [1e308, 1e308] is the diagonal (its norm alone would overflow)."""
+    raw = json.loads(json.dumps(GOOD))
+    raw["domain"]["planes"] = [{"normal": [1e308, 1e308], "point": [0.0, 0.0]}]
+    status, out, err = cli_main(capsys, "check", make_case(tmp_path, to_toml(raw).encode()))
+    assert status == 0 and "ok:" in out, err
+
+
+def test_an_empty_or_cut_checkpoint_is_refused_on_restart(tmp_path, capsys):
+    case_dir = write_case(tmp_path / "case", GOOD_CASE)
+    out = tmp_path / "out"
+    assert cli_main(capsys, "run", case_dir, "--output", out, "--progress", "off")[0] == 0
+    data = (out / "checkpoint.npz").read_bytes()
+    for cut in (b"", data[: len(data) // 2]):
+        (out / "checkpoint.npz").write_bytes(cut)
+        status, _, err = cli_main(capsys, "run", case_dir, "--output", out, "--restart", "--progress", "off")
+        assert status == 2 and "checkpoint.npz: --restart: not a readable checkpoint" in err and "Traceback" not in err
+
+
+def test_a_reader_that_leaves_early_stops_sph_quietly():
+    """`sph options | head -1`: a closed pipe ends sph with 128 + SIGPIPE and no traceback."""
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "sphcore.cli", "options"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    proc.stdout.read(10)
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait() == 128 + signal.SIGPIPE and "Traceback" not in err, err
+

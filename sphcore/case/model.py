@@ -176,8 +176,10 @@ def _planes(file, cfg, dim, bounded_by_walls=False) -> Planes:
         key = f"domain.planes[{k}]"
         e = validate_table(defaults.PLANE, entry, file, key)
         n = _vector(file, f"{key}.normal", e["normal"], dim)
-        if not np.linalg.norm(n) > 0:
-            raise CaseError(file, f"{key}.normal", "expected a non-zero vector")
+        scale = np.abs(n).max()  # scaled first: the norm of a vector of huge components overflows
+        if not (np.isfinite(scale) and scale > 0):
+            raise CaseError(file, f"{key}.normal", "expected a non-zero vector of finite components")
+        n = n / scale
         normals.append(n / np.linalg.norm(n))
         points.append(_vector(file, f"{key}.point", e["point"], dim))
     if not normals:

@@ -69,6 +69,8 @@ def parse_walls(file, entries, dim, case_dir) -> Faces:
         for name in ("min", "max", "points", "file"):
             if name not in need and w[name] is not None:
                 raise CaseError(file, f"{key}.{name}", f"not used by shape = {shape!r} (it takes {', '.join(need)})")
+            if name in need and w[name] is None:
+                raise CaseError(file, f"{key}.{name}", f"required by shape = {shape!r}")
         if shape == "box":
             lo, hi = _vec(file, f"{key}.min", w["min"], dim), _vec(file, f"{key}.max", w["max"], dim)
             if np.any(hi <= lo):

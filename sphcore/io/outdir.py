@@ -31,6 +31,9 @@ MARKER = ".sphcore-output"
 
 # -- where -------------------------------------------------------------------------------
 
+NAME_MAX = 255  # bytes in one folder name on the usual file systems (ext4, xfs, tmpfs, APFS)
+
+
 def resolve(case, output=None) -> Path:
     """The output directory: ``--output`` as given, else ``output.dir`` under the case
     directory. ``output.dir`` may not leave the case directory (an absolute path or ``..``):
@@ -42,6 +45,9 @@ def resolve(case, output=None) -> Path:
     if not rel or os.path.isabs(rel) or norm == ".." or norm.startswith(".." + os.sep) or norm == ".":
         raise CaseError(case.file, "output.dir", f"expected a sub-directory of the case directory, got {rel!r} "
                         "(write elsewhere with --output DIR)")
+    if "\0" in rel or any(len(part.encode()) > NAME_MAX for part in Path(norm).parts):
+        raise CaseError(case.file, "output.dir", f"expected folder names without NUL bytes, of at most {NAME_MAX} "
+                        f"bytes each, got {rel[:40]!r}...")
     return case.dir / norm
 
 

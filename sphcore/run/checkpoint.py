@@ -21,6 +21,8 @@ from sphcore.io.atomic import write_atomically
 from sphcore.run import resume
 
 NAME = "checkpoint.npz"
+#: what numpy raises on a file that is not a whole checkpoint (empty, cut, another format)
+UNREADABLE = (OSError, EOFError, ValueError, KeyError, zipfile.BadZipFile)
 
 
 def save(sim, directory: Path, extra: dict | None = None) -> Path:
@@ -44,9 +46,12 @@ def read(directory: Path) -> tuple[dict, dict]:
     path = Path(directory) / NAME
     if not path.exists():
         raise CaseError(path, "--restart", "no checkpoint to restart from in this output directory")
-    with np.load(path) as z:
-        meta = json.loads(str(z["meta"]))
-        arrays = {k: z[k].copy() for k in z.files if k != "meta"}
+    try:
+        with np.load(path) as z:
+            meta = json.loads(str(z["meta"]))
+            arrays = {k: z[k].copy() for k in z.files if k != "meta"}
+    except UNREADABLE as e:
+        raise CaseError(path, "--restart", f"not a readable checkpoint ({type(e).__name__}: {e})") from None
     return meta, arrays
 
 
@@ -58,5 +63,5 @@ def read_meta(directory: Path) -> dict:
     try:
         with np.load(path) as z:
             return json.loads(str(z["meta"]))
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
-        raise CaseError(path, "--restart", f"not a readable checkpoint ({e})") from None
+    except UNREADABLE as e:
+        raise CaseError(path, "--restart", f"not a readable checkpoint ({type(e).__name__}: {e})") from None
