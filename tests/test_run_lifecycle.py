@@ -436,6 +436,45 @@ def test_run_without_writers_writes_no_frames(case_dir, tmp_path, capsys):
                              "--set", 'plugins.use=["reflective"]')
     assert status == 0, err
     files = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
-    assert files == [".sphcore-output", "checkpoint.npz", "summary.json"]
+    assert files == [".sphcore-lock", ".sphcore-output", "checkpoint.npz", "summary.json"]
     s = summary_of(out)
     assert s["status"] == "completed" and "vtu_frames" not in s and "netcdf_frames" not in s
+
+
+# ----------------------------------------------------------------------------------------
+# one writer per output directory
+# ----------------------------------------------------------------------------------------
+
+
+def test_a_second_writer_is_refused_while_a_run_writes_the_directory(case_dir, tmp_path, capsys):
+    """--overwrite and --restart into a directory a live run writes: exit 2, one line naming
+    the live run, nothing of its output touched; the live run's frames stay whole (as many
+    netCDF as VTU frames), and once it has ended the directory is free again."""
+    out = tmp_path / "out"
+    proc = subprocess.Popen(sph_command() + ["run", str(case_dir), "--output", str(out), "--progress", "off",
+                                             "--t-end", "30"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        pvd = out / "mini_dam.pvd"
+        while not (pvd.exists() and len(read_pvd(pvd)) >= 3):
+            assert proc.poll() is None, f"sph ended before its first frames: {proc.communicate()}"
+            assert time.monotonic() < deadline, "no frames after 120 s"
+            time.sleep(0.01)
+        for extra in (["--overwrite"], ["--restart"]):
+            status, _, err = cli_run(capsys, "run", case_dir, "--output", out, "--progress", "off", *extra)
+            assert status == 2, err
+            assert f"another sph run (process {proc.pid}) is writing this directory" in err, err
+        assert proc.poll() is None, "the live run ended: it must outlast the refused writers"
+        proc.send_signal(signal.SIGTERM)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "stopped"
+    with xr.open_dataset(out / "particles.nc") as ds:
+        assert ds.sizes["time"] == len(read_pvd(out / "mini_dam.pvd"))
+    status, _, err = cli_run(capsys, "run", case_dir, "--output", out, "--progress", "off", "--t-end",
+                             str(summary["t"] + 0.02), "--restart")
+    assert status == 0, err

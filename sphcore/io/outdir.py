@@ -18,6 +18,7 @@ overwrite) stay out of it.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import time
@@ -27,6 +28,7 @@ from sphcore.errors import CaseError, OutputError
 from sphcore.io.atomic import temporary_name, write_text_atomically
 
 MARKER = ".sphcore-output"
+LOCK = ".sphcore-lock"  # held by the run writing the directory (WriterLock)
 
 
 # -- where -------------------------------------------------------------------------------
@@ -100,11 +102,48 @@ def _linked(out: Path, rel: str) -> bool:
     return False
 
 
-class Manifest:
-    """Keeps the marker's list of sph's files up to date during one run segment."""
+class WriterLock:
+    """One writer per output directory: an exclusive lock (``flock``) on ``LOCK`` inside it,
+    held while a run writes there and released by the operating system when the process
+    ends, however it ends. A second run, ``--overwrite`` or ``--restart`` into a directory a
+    live run holds is refused (OutputError, exit status 2) before it deletes or writes
+    anything. The lock file holds the process id of its holder, for the message."""
 
-    def __init__(self, out: Path, case_file=None):
+    def __init__(self, out: Path):
+        path = Path(out) / LOCK
+        if path.is_symlink():
+            raise OutputError(f"{path} is a symbolic link: sph never writes through one; remove it")
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+        except OSError as e:
+            raise OutputError(f"cannot create {path}: {e.strerror or e}") from e
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            raise OutputError(f"{out}: another sph run (process {holder}) is writing this directory: wait for it "
+                              "to end, or pass --output DIR") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self.fd = fd
+
+    def release(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+    def __del__(self):  # a lock nobody holds any more (an error path) frees the directory
+        self.release()
+
+
+class Manifest:
+    """Keeps the marker's list of sph's files up to date during one run segment, and holds
+    the directory's writer lock until :meth:`release`."""
+
+    def __init__(self, out: Path, case_file=None, lock: WriterLock | None = None):
         self.out = Path(out)
+        self.lock = lock
         self.case = _identity(case_file)
         self.start_ns = time.time_ns() - 2_000_000_000  # coarse file-system clocks: 2 s slack
         old = read_marker(self.out) or {}
@@ -125,12 +164,17 @@ class Manifest:
                 except OSError:
                     continue
                 rel = os.path.normpath(os.path.join(rel_root, name))
-                if rel == MARKER or not os.path.isfile(full) or os.path.islink(full):
+                if rel in (MARKER, LOCK) or not os.path.isfile(full) or os.path.islink(full):
                     continue
                 if st.st_mtime_ns >= self.start_ns:
                     self.files.add(rel)
         self.files = {f for f in self.files if os.path.lexists(self.out / f)}
         self.write()
+
+    def release(self) -> None:
+        """Let another run write this directory (the end of the run)."""
+        if self.lock is not None:
+            self.lock.release()
 
     def write(self) -> None:
         data = {"written_by": "sphcore", "dir": _identity(self.out), "case": self.case,
@@ -189,7 +233,9 @@ def prepare(out: Path, case_file=None, overwrite=False, restart=False) -> Manife
                           f"(pass the link's target with --output)")
     if out.exists() and not out.is_dir():
         raise OutputError(f"output path {out} exists and is not a directory")
+    lock = None
     if restart and out.is_dir():
+        lock = WriterLock(out)  # before anything is touched: a live run may hold it
         _remove_stale_temporaries(out, read_marker(out))
     if out.exists() and any(out.iterdir()) and not restart:
         if not overwrite:
@@ -204,12 +250,13 @@ def prepare(out: Path, case_file=None, overwrite=False, restart=False) -> Manife
         if case_file is not None and marker.get("case") not in ("", _identity(case_file)):
             raise OutputError(f"refusing to overwrite {out}: it holds the output of another case "
                               f"({marker.get('case')}); pass --output DIR")
+        lock = WriterLock(out)  # sph's own directory: locked before anything of it is deleted
         _remove_listed(out, marker)  # refuses (before deleting) when a listed path became a link
         _remove_stale_temporaries(out, marker)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise OutputError(f"cannot create output directory {out}: {e.strerror}") from e
-    manifest = Manifest(out, case_file)
+    manifest = Manifest(out, case_file, lock or WriterLock(out))
     manifest.write()
     return manifest

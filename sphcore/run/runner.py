@@ -262,18 +262,21 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
         }
         # each of these may meet a full disk (front.csv, summary.json): what was written
         # before is kept, the writers are still closed, and the run reports the error
-        for write in (lambda: summary.update(pluginhost.summaries(pm, sim.ctx)),
-                      lambda: pm.hook.sph_finish(ctx=sim.ctx),
-                      lambda: _write_json(out / "summary.json", summary),
-                      manifest.update):
-            try:
-                write()
-            except OutputError as e:
-                if summary["status"] in ("completed", "stopped"):
-                    summary["status"] = "output_error"
-                    summary["message"] = f"{e}; the last checkpoint is kept (--restart)"
-                elif summary["status"] != "failed":
-                    summary["message"] += f"; also {e}"
+        try:
+            for write in (lambda: summary.update(pluginhost.summaries(pm, sim.ctx)),
+                          lambda: pm.hook.sph_finish(ctx=sim.ctx),
+                          lambda: _write_json(out / "summary.json", summary),
+                          manifest.update):
+                try:
+                    write()
+                except OutputError as e:
+                    if summary["status"] in ("completed", "stopped"):
+                        summary["status"] = "output_error"
+                        summary["message"] = f"{e}; the last checkpoint is kept (--restart)"
+                    elif summary["status"] != "failed":
+                        summary["message"] += f"; also {e}"
+        finally:
+            manifest.release()  # another run may write this directory now
     return RunResult(summary["status"], summary["message"], summary, sim, stop.get("stopped_by"))
 
 

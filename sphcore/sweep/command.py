@@ -190,9 +190,10 @@ def run(p: Plan, output=None, scheduler=None, workers=None, processes=True, time
     summaries: dict[int, dict] = {}
     interrupted = False
     token = uuid.uuid4().hex[:8]  # task keys unique on a shared scheduler
+    manifest = None
     start = time.time()
     try:
-        runner.prepare_output(out, overwrite)  # refuses a directory sph did not write
+        manifest = runner.prepare_output(out, overwrite)  # refuses a directory sph did not write; held until the end
         bar = _Progress(len(p.variants), progress)
         bar.say(f"[sweep] {len(p.variants)} variants of {p.case_dir} on a {where}; results in {out}")
         futures = {client.submit(run_variant, str(p.case_dir), str(out / v.name), v.overrides, p.t_end, timeout_s,
@@ -235,6 +236,8 @@ def run(p: Plan, output=None, scheduler=None, workers=None, processes=True, time
         numeric = [k for k in ds.data_vars if k not in ("status", "message")]
         print(f"sph: warning: no summary key {error_key!r}, no {PLOT} drawn; keys: {', '.join(numeric)}",
               file=sys.stderr)
+    if manifest is not None:
+        manifest.release()
     return ds
 
 
