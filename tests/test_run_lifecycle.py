@@ -478,3 +478,19 @@ def test_a_second_writer_is_refused_while_a_run_writes_the_directory(case_dir, t
     status, _, err = cli_run(capsys, "run", case_dir, "--output", out, "--progress", "off", "--t-end",
                              str(summary["t"] + 0.02), "--restart")
     assert status == 0, err
+
+
+def test_restart_refuses_to_write_through_a_link_put_in_place_of_its_file(case_dir, tmp_path, capsys):
+    """After a stop, particles.nc replaced by a link to a file elsewhere: --restart refuses
+    (exit 2, naming the file) and the file the link points to is not touched."""
+    out = tmp_path / "out"
+    status, _, err = cli_run(capsys, "run", case_dir, "--output", out, "--progress", "off", "--t-end", "0.02")
+    assert status == 0, err
+    elsewhere = tmp_path / "elsewhere.nc"
+    (out / "particles.nc").rename(elsewhere)
+    (out / "particles.nc").symlink_to(elsewhere)
+    before = elsewhere.read_bytes()
+    status, _, err = cli_run(capsys, "run", case_dir, "--output", out, "--progress", "off", "--t-end", "0.04",
+                             "--restart")
+    assert status == 2 and "particles.nc is a symbolic link" in err, err
+    assert elsewhere.read_bytes() == before

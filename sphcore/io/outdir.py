@@ -236,7 +236,13 @@ def prepare(out: Path, case_file=None, overwrite=False, restart=False) -> Manife
     lock = None
     if restart and out.is_dir():
         lock = WriterLock(out)  # before anything is touched: a live run may hold it
-        _remove_stale_temporaries(out, read_marker(out))
+        marker = read_marker(out)
+        for rel in (marker or {}).get("files", []) + (marker or {}).get("dirs", []):
+            if isinstance(rel, str) and _linked(out, rel):
+                lock.release()
+                raise OutputError(f"refusing to restart in {out}: {rel} is a symbolic link now (sph never writes "
+                                  "through one); put the file back or restart into a copy")
+        _remove_stale_temporaries(out, marker)
     if out.exists() and any(out.iterdir()) and not restart:
         if not overwrite:
             raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or --output DIR")
