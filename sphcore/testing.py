@@ -113,4 +113,4 @@ def context(text: str = TINY_CASE, file="case.toml", output_dir=None, plugins=No
         raw.setdefault("plugins", {})["use"] = list(plugins)
     case = validate(raw, Path(file), pluginhost.option_schemas(file, raw))
     state = build_state(case)
-    return RunContext(case, derive(case, state), RunState(state, case.config["time"]["t_end"]), None, output_dir)
+    return RunContext(case, derive(case, state), RunState(state, case.config["time"]["t_end"]), output_dir=output_dir)

@@ -494,3 +494,30 @@ def test_restart_refuses_to_write_through_a_link_put_in_place_of_its_file(case_d
                              "--restart")
     assert status == 2 and "particles.nc is a symbolic link" in err, err
     assert elsewhere.read_bytes() == before
+
+
+def test_a_refused_writer_prints_one_line_and_leaves_the_lock_free(tmp_path):
+    """The lock's refusals are one line on stderr (no 'Exception ignored' from a half-made
+    lock), and a refused or failed prepare in this process leaves the directory free."""
+    import subprocess as sp
+    import sys as _sys
+
+    from sphcore.errors import OutputError
+    from sphcore.io import outdir
+
+    out = tmp_path / "out"
+    out.mkdir()
+    holder = outdir.WriterLock(out)
+    holder.record()
+    code = ("import sys; from pathlib import Path; from sphcore.io import outdir; from sphcore.errors import OutputError\n"
+            "try:\n    outdir.WriterLock(Path(sys.argv[1]))\nexcept OutputError as e:\n    print(e, file=sys.stderr)\n")
+    res = sp.run([_sys.executable, "-c", code, str(out)], capture_output=True, text=True)
+    assert res.stderr.strip() == f"{out}: another sph run (process {os.getpid()}) is writing this directory: wait for " \
+                                 "it to end, or pass --output DIR"
+    holder.release()
+    (out / "x").write_text("a user's file, not sph's")
+    with pytest.raises(OutputError):
+        outdir.prepare(out, overwrite=True)  # no marker: refused before any lock is taken
+    (out / "x").unlink()
+    manifest = outdir.prepare(out)  # free again, and a lock file alone is an empty directory
+    manifest.release()

@@ -18,9 +18,11 @@ overwrite) stay out of it.
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import json
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -107,26 +109,43 @@ class WriterLock:
     held while a run writes there and released by the operating system when the process
     ends, however it ends. A second run, ``--overwrite`` or ``--restart`` into a directory a
     live run holds is refused (OutputError, exit status 2) before it deletes or writes
-    anything. The lock file holds the process id of its holder, for the message."""
+    anything. The lock file holds the process id of its holder, for the message. On a file
+    system without locks (some network mounts) the run goes on unlocked, and says so."""
 
     def __init__(self, out: Path):
-        path = Path(out) / LOCK
+        self.fd = None
+        self.path = path = Path(out) / LOCK
         if path.is_symlink():
             raise OutputError(f"{path} is a symbolic link: sph never writes through one; remove it")
         try:
             fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
         except OSError as e:
-            raise OutputError(f"cannot create {path}: {e.strerror or e}") from e
+            raise OutputError(f"{path}: cannot create: {e.strerror or e}") from e
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
-            os.close(fd)
-            raise OutputError(f"{out}: another sph run (process {holder}) is writing this directory: wait for it "
-                              "to end, or pass --output DIR") from None
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
+        except OSError as e:
+            if e.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
+                os.close(fd)
+                raise OutputError(f"{out}: another sph run (process {holder}) is writing this directory: wait for "
+                                  "it to end, or pass --output DIR") from None
+            os.close(fd)  # no locks on this file system
+            print(f"sph: warning: {path}: cannot lock ({e.strerror or e}); nothing stops a second run from "
+                  "writing this directory at the same time", file=sys.stderr)
+            return
         self.fd = fd
+
+    def record(self) -> None:
+        """Write this process's id into the lock file (for a refused writer's message); done
+        when the run starts writing, so that a refused restart changes nothing on disk."""
+        if self.fd is None:
+            return
+        try:
+            os.ftruncate(self.fd, 0)
+            os.write(self.fd, f"{os.getpid()}\n".encode())
+        except OSError as e:
+            self.release()
+            raise OutputError(f"{Path(self.path)}: cannot write: {e.strerror or e}") from e
 
     def release(self) -> None:
         if self.fd is not None:
@@ -224,45 +243,79 @@ def _remove_stale_temporaries(out: Path, marker: dict | None) -> None:
                     pass  # harmless: the next write of that file replaces it
 
 
-def prepare(out: Path, case_file=None, overwrite=False, restart=False) -> Manifest:
+def prepare(out: Path, case_file=None, overwrite=False, restart=False, lock: WriterLock | None = None) -> Manifest:
     """Create (or reuse, on restart) the output directory; never clobber what is not sph's.
-    Raises OutputError (exit status 2: nothing written)."""
+    Raises OutputError (exit status 2: nothing written). ``lock``: the directory's writer
+    lock when the caller took it already (a restart takes it before reading the checkpoint);
+    on an error the lock is released."""
     out = Path(out)
+    try:
+        return _prepare(out, case_file, overwrite, restart, lock)
+    except BaseException:
+        if lock is not None:
+            lock.release()
+        raise
+
+
+def _prepare(out: Path, case_file, overwrite, restart, lock) -> Manifest:
     if out.is_symlink():
         raise OutputError(f"output directory {out} is a symbolic link: sph writes only into a real directory "
                           f"(pass the link's target with --output)")
     if out.exists() and not out.is_dir():
         raise OutputError(f"output path {out} exists and is not a directory")
-    lock = None
-    if restart and out.is_dir():
-        lock = WriterLock(out)  # before anything is touched: a live run may hold it
-        marker = read_marker(out)
-        for rel in (marker or {}).get("files", []) + (marker or {}).get("dirs", []):
-            if isinstance(rel, str) and _linked(out, rel):
-                lock.release()
-                raise OutputError(f"refusing to restart in {out}: {rel} is a symbolic link now (sph never writes "
-                                  "through one); put the file back or restart into a copy")
-        _remove_stale_temporaries(out, marker)
-    if out.exists() and any(out.iterdir()) and not restart:
-        if not overwrite:
-            raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or --output DIR")
-        marker = read_marker(out)
-        if marker is None:
-            raise OutputError(f"refusing to overwrite {out}: it was not written by sph (no valid {MARKER} file "
-                              "listing sph's files; an empty one, from an older sph, lists none: delete it yourself)")
-        if marker.get("dir") != _identity(out):
-            raise OutputError(f"refusing to overwrite {out}: its {MARKER} was written for {marker.get('dir')!r} "
-                              "(a copied marker proves nothing)")
-        if case_file is not None and marker.get("case") not in ("", _identity(case_file)):
-            raise OutputError(f"refusing to overwrite {out}: it holds the output of another case "
-                              f"({marker.get('case')}); pass --output DIR")
-        lock = WriterLock(out)  # sph's own directory: locked before anything of it is deleted
-        _remove_listed(out, marker)  # refuses (before deleting) when a listed path became a link
-        _remove_stale_temporaries(out, marker)
+    own = []  # the lock taken here, released on an error below
+
+    def take() -> WriterLock:
+        own.append(WriterLock(out))
+        return own[-1]
+
     try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise OutputError(f"cannot create output directory {out}: {e.strerror}") from e
-    manifest = Manifest(out, case_file, lock or WriterLock(out))
-    manifest.write()
-    return manifest
+        if restart and out.is_dir():
+            lock = lock or take()  # before anything is touched: a live run may hold it
+            marker = read_marker(out)
+            _refuse_links_on_restart(out, marker)
+            _remove_stale_temporaries(out, marker)
+        # a lock file alone (a run that failed before its marker) leaves the directory empty
+        if out.exists() and any(p.name != LOCK for p in out.iterdir()) and not restart:
+            if not overwrite:
+                raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or "
+                                  "--output DIR")
+            marker = read_marker(out)
+            if marker is None:
+                raise OutputError(f"refusing to overwrite {out}: it was not written by sph (no valid {MARKER} file "
+                                  "listing sph's files; an empty one, from an older sph, lists none: delete it "
+                                  "yourself)")
+            if marker.get("dir") != _identity(out):
+                raise OutputError(f"refusing to overwrite {out}: its {MARKER} was written for {marker.get('dir')!r} "
+                                  "(a copied marker proves nothing)")
+            if case_file is not None and marker.get("case") not in ("", _identity(case_file)):
+                raise OutputError(f"refusing to overwrite {out}: it holds the output of another case "
+                                  f"({marker.get('case')}); pass --output DIR")
+            lock = lock or take()  # sph's own directory: locked before anything of it is deleted
+            _remove_listed(out, marker)  # refuses (before deleting) when a listed path became a link
+            _remove_stale_temporaries(out, marker)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise OutputError(f"cannot create output directory {out}: {e.strerror}") from e
+        manifest = Manifest(out, case_file, lock or take())
+        manifest.lock.record()
+        manifest.write()
+        return manifest
+    except BaseException:
+        for held in own:
+            held.release()
+        raise
+
+
+def _refuse_links_on_restart(out: Path, marker: dict | None) -> None:
+    """A restart appends to files of the run: refuse if one of them, or a folder on the way,
+    is a symbolic link now (the marker's list; without a marker, anything in the directory)."""
+    if marker is not None:
+        listed = [r for r in marker.get("files", []) + marker.get("dirs", []) if isinstance(r, str)]
+        linked = [r for r in listed if _linked(out, r)]
+    else:
+        linked = [str(p.relative_to(out)) for p in out.rglob("*") if p.is_symlink()]
+    if linked:
+        raise OutputError(f"refusing to restart in {out}: {linked[0]} is a symbolic link now (sph never writes "
+                          "through one); put the file back or restart into a copy")

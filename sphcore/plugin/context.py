@@ -52,8 +52,11 @@ class RunContext:
     plugin reads or changes is always the run's own. ``pressure`` owns the force pressure
     (:class:`sphcore.physics.forces.PressureField`; None: the physical pressure)."""
 
-    def __init__(self, case, params, run, pressure=None, output_dir: Path | None = None, restarting: bool = False,
+    def __init__(self, case, params, run, *, pressure=None, output_dir: Path | None = None, restarting: bool = False,
                  plugin_name=None):
+        if not hasattr(run, "particles"):
+            raise TypeError("RunContext takes the run state (sphcore.run.state.RunState), not the particles; "
+                            "sphcore.testing.context() builds a context of a case for a test")
         self.case = case
         self.params = params
         self.run = run

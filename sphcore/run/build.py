@@ -60,7 +60,11 @@ def _build(case, pm, output_dir, restarting, relaxing, settle) -> Simulation:
         _hydrostatic_start(case, prm, particles, tops)
     run = RunState(particles, cfg["time"]["t_end"])
     if restarting:  # constants above come from the case's initial particles, as in the first run
-        run.load_payload(*checkpoint.read(output_dir))
+        try:
+            run.load_payload(*checkpoint.read(output_dir))
+        except (KeyError, ValueError) as e:
+            raise CaseError(Path(output_dir) / checkpoint.NAME, "--restart", f"not a checkpoint of this run ({e})") \
+                from None
     elif settle and not relaxing and cfg["relax"]["time"] > 0:
         # positions and densities at rest in the scheme's equilibrium, before t = 0
         run.stats.setdefault(CORE, {})["relax"] = relax.settle(case, particles, _relaxation)

@@ -57,6 +57,12 @@ class RunResult:
     def __contains__(self, key) -> bool:
         return key in self.summary
 
+    def keys(self):
+        return self.summary.keys()
+
+    def items(self):
+        return self.summary.items()
+
     @property
     def t(self) -> float:
         return self.summary["t"]
@@ -119,11 +125,14 @@ def output_path(case, output=None) -> Path:
     return outdir.resolve(case, output)
 
 
-def prepare_output(out: Path, overwrite=False, restart=False, case_file=None) -> "outdir.Manifest":
-    """Create the output directory; never clobber one silently (sweeps call this too)."""
+def prepare_output(out: Path, overwrite=False, restart=False, case_file=None, lock=None) -> "outdir.Manifest":
+    """Create the output directory; never clobber one silently (sweeps call this too).
+    ``lock``: the directory's writer lock, when the caller holds it already."""
     if restart and not (Path(out) / checkpoint.NAME).exists():
+        if lock is not None:
+            lock.release()
         raise CaseError(Path(out) / checkpoint.NAME, "--restart", "no checkpoint to restart from")
-    return outdir.prepare(out, case_file, overwrite, restart)
+    return outdir.prepare(out, case_file, overwrite, restart, lock)
 
 
 def peak_memory_mb() -> float:
@@ -144,30 +153,38 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     case, pm = load(case_dir, overrides, t_end)
     out = output_path(case, output)
     mode = "off" if quiet else (progress or case.config["output"]["progress"])
-    saved = None
-    if restart:  # continue the same run only: case, version and directory must match (issue 13)
-        saved = checkpoint.read_meta(out)
-        resume.verify(saved, case, out, out / checkpoint.NAME)
-    # sizing the first step below evaluates the forces: that compiles the force kernels on a
-    # fresh machine (said before it starts; checked after it, the cache would always hold them)
-    if mode != "off" and not kernels_cached(case.config["case"]["dim"]):
-        print("[sph] compiling kernels, once (about 10 s; later runs load them from the cache)",
-              file=sys.stderr, flush=True)
-    if mode != "off" and not restart and case.config["relax"]["time"] > 0:
-        print(f"[sph] relaxing the start: {case.config['relax']['time']:g} s of damped motion before t = 0",
-              file=sys.stderr, flush=True)
-    # particles and plugins are set up, and the first step sized, before anything touches
-    # the disk: a case that fails there leaves the output directory as it was
+    saved, lock = None, None
+    if restart and (out / checkpoint.NAME).is_file() and not out.is_symlink():
+        # a live run may be writing the directory: refused before its checkpoint is read
+        lock = outdir.WriterLock(out)
     try:
-        sim = build(case, pm, out, restarting=restart)
-    except CaseError as e:  # the relaxation's errors name its key, which may have come from --set
-        raise _blame_option(e, overrides, t_end) from None
-    relaxed = sim.ctx.stats("core").get("relax")
-    if relaxed and mode != "off" and not restart:
-        print(f"[sph] relaxed in {relaxed['wall_time_s']:.1f} s: particles moved up to {relaxed['max_move_dx']:.3g} dx, "
-              f"last speed {relaxed['last_speed_m_s']:.2g} m/s", file=sys.stderr, flush=True)
-    budget.check_first_step(sim)
-    manifest = prepare_output(out, overwrite, restart, case.file)
+        if restart:  # continue the same run only: case, version and directory must match
+            saved = checkpoint.read_meta(out)
+            resume.verify(saved, case, out, out / checkpoint.NAME)
+        # sizing the first step below evaluates the forces: that compiles the force kernels on a
+        # fresh machine (said before it starts; checked after it, the cache would always hold them)
+        if mode != "off" and not kernels_cached(case.config["case"]["dim"]):
+            print("[sph] compiling kernels, once (about 10 s; later runs load them from the cache)",
+                  file=sys.stderr, flush=True)
+        if mode != "off" and not restart and case.config["relax"]["time"] > 0:
+            print(f"[sph] relaxing the start: {case.config['relax']['time']:g} s of damped motion before t = 0",
+                  file=sys.stderr, flush=True)
+        # particles and plugins are set up, and the first step sized, before anything touches
+        # the disk: a case that fails there leaves the output directory as it was
+        try:
+            sim = build(case, pm, out, restarting=restart)
+        except CaseError as e:  # the relaxation's errors name its key, which may have come from --set
+            raise _blame_option(e, overrides, t_end) from None
+        relaxed = sim.ctx.stats("core").get("relax")
+        if relaxed and mode != "off" and not restart:
+            print(f"[sph] relaxed in {relaxed['wall_time_s']:.1f} s: particles moved up to {relaxed['max_move_dx']:.3g} dx, "
+                  f"last speed {relaxed['last_speed_m_s']:.2g} m/s", file=sys.stderr, flush=True)
+        budget.check_first_step(sim)
+        manifest = prepare_output(out, overwrite, restart, case.file, lock)
+    except BaseException:
+        if lock is not None:
+            lock.release()
+        raise
     past = resume.history(saved)
     stop = {"signum": None}
 

@@ -42,7 +42,8 @@ class Simulation:
         self.relaxing = relaxing  # the relaxation's own run (sphcore.run.relax): no sph_after_step
         self.run = run
         self.pressure = PressureField(params)
-        self.ctx = ctx = RunContext(case, params, run, self.pressure, output_dir, restarting,
+        self.ctx = ctx = RunContext(case, params, run, pressure=self.pressure, output_dir=output_dir,
+                                    restarting=restarting,
                                     plugin_name=lambda plugin: pm.get_name(plugin) or type(plugin).__name__)
         self.hooks = HookRelay(pm)  # the per-step hooks (no pluggy call where none is implemented)
         self.forces = Forces(ctx, self.hooks, self.pressure)

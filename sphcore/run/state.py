@@ -170,8 +170,10 @@ class RunState:
         self.particles = ParticleState(**{name: arrays[f"state_{name}"] for name in names})
         self.clock = Clock(meta["t"], meta["step"], meta["dt"], self.clock.t_end)
         self.rates = Rates(self.particles.n, self.particles.dim)
-        if arrays["acc"].shape == self.rates.acc.shape:
-            self.rates.acc[...] = arrays["acc"]
+        if arrays["acc"].shape != self.rates.acc.shape:
+            raise ValueError(f"its accelerations have the shape {arrays['acc'].shape}, its particles "
+                             f"{self.rates.acc.shape}")
+        self.rates.acc[...] = arrays["acc"]
         if "drho" in arrays and arrays["drho"].shape == self.rates.drho.shape:
             self.rates.drho[...] = arrays["drho"]
         self.rates.fresh = bool(meta["fresh"])
@@ -179,7 +181,8 @@ class RunState:
             self.stats.setdefault(plugin, {}).update(values)
         for plugin, values in meta.get("kept", {}).items():
             self.kept.setdefault(plugin, {}).update(
-                {k: arrays[v["__array__"]] if isinstance(v, dict) and "__array__" in v else v for k, v in values.items()})
+                {k: arrays[v["__array__"]] if isinstance(v, dict) and "__array__" in v else v
+                 for k, v in values.items()})
         self.counters.update(meta["counters"])
         self._anchor = arrays.get("pair_list_positions")
 
@@ -197,6 +200,6 @@ def _restore_namespaces(live: dict, saved: dict) -> None:
                 del target[key]
         for key, value in values.items():
             if isinstance(target.get(key), list) and isinstance(value, list):
-                target[key][:] = value
+                target[key][:] = copy.deepcopy(value)
             else:
-                target[key] = value
+                target[key] = copy.deepcopy(value)  # the snapshot stays as it was taken

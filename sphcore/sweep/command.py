@@ -193,7 +193,7 @@ def run(p: Plan, output=None, scheduler=None, workers=None, processes=True, time
     manifest = None
     start = time.time()
     try:
-        manifest = runner.prepare_output(out, overwrite)  # refuses a directory sph did not write; held until the end
+        manifest = runner.prepare_output(out, overwrite)  # refuses a directory sph did not write
         bar = _Progress(len(p.variants), progress)
         bar.say(f"[sweep] {len(p.variants)} variants of {p.case_dir} on a {where}; results in {out}")
         futures = {client.submit(run_variant, str(p.case_dir), str(out / v.name), v.overrides, p.t_end, timeout_s,
@@ -211,6 +211,8 @@ def run(p: Plan, output=None, scheduler=None, workers=None, processes=True, time
             bar.say("[sweep] interrupted: stopping the running variants (each writes a checkpoint)")
             _interrupt(client, futures, out, summaries)
     finally:
+        if manifest is not None:  # the variants have ended: another sweep may use the directory
+            manifest.release()
         if bar is not None:
             bar.close()
         cluster = getattr(client, "cluster", None)
@@ -236,8 +238,6 @@ def run(p: Plan, output=None, scheduler=None, workers=None, processes=True, time
         numeric = [k for k in ds.data_vars if k not in ("status", "message")]
         print(f"sph: warning: no summary key {error_key!r}, no {PLOT} drawn; keys: {', '.join(numeric)}",
               file=sys.stderr)
-    if manifest is not None:
-        manifest.release()
     return ds
 
 
