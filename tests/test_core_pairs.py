@@ -22,7 +22,7 @@ from sphcore.physics.equations import PAIRS_PARALLEL_MIN, WallTerms, sph_rates
 from sphcore.physics.kernels import kernel_f, kernel_w
 from sphcore.physics.pairterms import WORK_COLUMNS
 from sphcore.physics.particles import Fields
-from sphcore.physics.wall_completion import complete_at_wall
+from sphcore_plugins.wall_integral.completion import complete_at_wall
 
 
 def _setup(tmp_path, dim, seed, kernel_gradient, walls, side=None):
@@ -134,7 +134,7 @@ def test_pair_loop_equals_the_gather_of_every_term(tmp_path, dim, kernel_gradien
     acc = np.zeros((n_dest, dim))
     drho = np.zeros(n_dest)
     sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], WORK_COLUMNS)),
-              np.zeros_like(src.pos), numba.get_num_threads())
+              np.zeros_like(src.pos), numba.get_num_threads(), complete_at_wall)
     ref_acc, ref_drho = _reference(n_dest, src, prm, L, wall)
     assert np.abs(acc - ref_acc).max() <= 1e-11 * np.abs(ref_acc).max()
     assert np.abs(drho - ref_drho).max() <= 1e-11 * np.abs(ref_drho).max()
@@ -150,7 +150,7 @@ def test_pair_forces_are_equal_and_opposite(tmp_path, dim):
     prm = prm._replace(gravity=np.zeros(3))
     acc = np.zeros((n_dest, dim))
     drho = np.zeros(n_dest)
-    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], WORK_COLUMNS)), np.zeros_like(src.pos), 2)
+    sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], WORK_COLUMNS)), np.zeros_like(src.pos), 2, complete_at_wall)
     force = (src.m[:, None] * acc).sum(axis=0)
     scale = np.abs(src.m[:, None] * acc).sum(axis=0)
     assert np.all(np.abs(force) <= 1e-14 * scale)
@@ -174,7 +174,7 @@ def test_result_does_not_depend_on_the_thread_count(tmp_path, dim):
             acc = np.zeros((n_dest, dim))
             drho = np.zeros(n_dest)
             sph_rates(n_dest, src, cells.view, prm, L, wall, acc, drho, np.zeros((src.pos.shape[0], WORK_COLUMNS)),
-                      np.zeros_like(src.pos), nth)
+                      np.zeros_like(src.pos), nth, complete_at_wall)
             out.append((acc, drho))
     finally:
         numba.set_num_threads(before)
@@ -188,14 +188,15 @@ def test_three_passes_give_the_fused_loops_bits_in_3d(tmp_path, kernel_gradient)
     """The 3D pair loop walks a particle's partners in three passes (gather, vectorised
     terms, scatter in the partners' order); the fused walk of 2D, built here for 3D, must
     give the same bits, every term on, wall sums included (sphcore.physics.pairterms)."""
-    from sphcore.physics.equations import _RATES, _build
+    from sphcore.physics.equations import _build
 
-    fused = _build(3, True, three_pass=False)
-    for rates, three in ((_RATES[3, True], True), (fused, False)):  # the two walks, not one twice
+    fused = _build(3, complete_at_wall, three_pass=False)
+    walls = _build(3, complete_at_wall)
+    for rates, three in ((walls, True), (fused, False)):  # the two walks, not one twice
         assert rates.py_func.__globals__["_slab_pairs"].py_func.__globals__["THREE_PASS"] is three
     n_dest, src, cells, prm, L, wall = _setup(tmp_path, 3, 5, kernel_gradient, True)
     out = []
-    for rates in (_RATES[3, True], fused):
+    for rates in (walls, fused):
         acc, drho = np.zeros((n_dest, 3)), np.zeros(n_dest)
         work = np.zeros((src.pos.shape[0], WORK_COLUMNS))
         rates(n_dest, src, cells.view, prm, L, wall, acc, drho, work, np.zeros_like(src.pos), 1)

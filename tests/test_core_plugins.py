@@ -355,3 +355,63 @@ def test_an_unselected_plugins_table_is_still_validated(tmp_path):
     case_dir = write_case(tmp_path / "d", plugins=["reflective"], tables={"probez": {"every_dt": 0.1}})
     with pytest.raises(CaseError, match=r"unknown section \(known: .*probes.*vtu"):
         runner.load(case_dir)
+
+
+WALL_PLUGIN = '''
+"""A throwaway wall model: a share of 1 at every particle, completed by a push along x."""
+from numba import njit
+
+from sphcore.api import hookimpl
+
+
+@njit(inline="always")
+def push(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam):
+    return a0 + 2.5 * wall.share[i], a1, a2, dr
+
+
+class PushWall:
+    @hookimpl
+    def sph_wall_terms(self, ctx, terms):
+        terms.share[:] = 1.0
+
+    @hookimpl
+    def sph_wall_completion(self, dim):
+        return push if COMPLETES else None
+
+
+COMPLETES = True
+'''
+
+
+@pytest.fixture
+def wall_plugins(site):
+    install(site, "throwaway_wall_sph", WALL_PLUGIN, "throwaway-wall-sph",
+            "[sphcore]\nthrowaway_wall = throwaway_wall_sph:PushWall\n")
+    install(site, "throwaway_halfwall_sph", WALL_PLUGIN.replace("COMPLETES = True", "COMPLETES = False"),
+            "throwaway-halfwall-sph", "[sphcore]\nthrowaway_halfwall = throwaway_halfwall_sph:PushWall\n")
+    pluginhost.refresh()
+    return site
+
+
+@pytest.mark.slow
+def test_a_wall_model_plugin_completes_the_pair_sums_with_its_own_function(wall_plugins, tmp_path):
+    """The core compiles a plugin's wall completion into its pair loop: a completion that
+    adds 2.5 share_i to the x acceleration moves every particle's acceleration by exactly
+    2.5 m/s^2 (the pair sums and gravity unchanged); a plugin with wall terms and no
+    completion, or two different completions, is refused before the run starts."""
+    from sphcore.testing import TINY_CASE
+
+    acc = {}
+    for use in (["reflective"], ["reflective", "throwaway_wall"]):
+        case_dir = write_case(tmp_path / "_".join(use), TINY_CASE.replace("use = []", f"use = {json.dumps(use)}"))
+        sim = make_sim(case_dir)
+        a, drho = np.zeros((sim.state.n, 2)), np.zeros(sim.state.n)
+        sim.forces.evaluate(a, drho)  # the rates of the initial particles
+        acc[len(use)] = a
+    np.testing.assert_allclose(acc[2][:, 0] - acc[1][:, 0], 2.5, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(acc[2][:, 1], acc[1][:, 1])
+    for use, said in ((["throwaway_halfwall"], "supply none"), (["throwaway_wall", "wall_integral"], "push")):
+        case_dir = write_case(tmp_path / "_".join(use), TINY_CASE.replace("use = []", f"use = {json.dumps(use)}"))
+        with pytest.raises(CaseError, match="sph_wall_completion") as err:
+            make_sim(case_dir)
+        assert said in str(err.value)

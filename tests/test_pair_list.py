@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from sphcore.neighbours.cellgrid import CellGrid, neighbour_pairs
 from sphcore.neighbours.pairlist import PairList
 from sphcore.physics.equations import WallTerms, sph_rates
+from sphcore_plugins.wall_integral.completion import complete_at_wall
 from sphcore.physics.pairterms import WORK_COLUMNS
 from sphcore.physics.particles import Fields
 from sphcore.run import runner
@@ -64,7 +65,7 @@ def _rates(src, view, prm, wall=None):
     wall = wall if wall is not None else _walls(n, dim, 0, False)
     acc, drho = np.zeros((n, dim)), np.zeros(n)
     sph_rates(n, src, view, prm, np.zeros((1, 3, 3)), wall, acc, drho, np.zeros((n, WORK_COLUMNS)),
-              np.zeros_like(src.pos), numba.get_num_threads())
+              np.zeros_like(src.pos), numba.get_num_threads(), complete_at_wall)
     return acc, drho
 
 

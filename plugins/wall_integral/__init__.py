@@ -7,7 +7,7 @@ each particle's kernel support, computed from the wall planes (``share.py``: clo
 for planes, corners and wedges of any angle, 2D and 3D): the share s, its gradient G, the
 hydrostatic moment T g, and the projector onto the near walls' normals (``normals.py``),
 for the particles within 2h of a plane only (``planes.py``). The core completes the sums with them
-(:func:`sphcore.physics.wall_completion._complete_at_wall`):
+(:func:`.completion.complete_at_wall`, compiled into the core's pair loop):
 
     drho_i/dt = sum_j m_j v_ij . grad W_ij + 2 rho_i v_i . G_w
     dv_i/dt   = g - sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad W_ij
@@ -86,6 +86,12 @@ class WallIntegralPlugin:
         self.offsets = np.ascontiguousarray(case.planes.offsets, dtype=np.float64)
         self._faces = None  # (verts, grid arrays, stamps), built on first use (the grid needs h)
         self._epoch = 0
+
+    @hookimpl
+    def sph_wall_completion(self, dim):
+        from .completion import complete_at_wall
+
+        return complete_at_wall
 
     @hookimpl
     def sph_wall_terms(self, ctx, terms):

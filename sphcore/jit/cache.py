@@ -1,11 +1,11 @@
 """numba's on-disk cache kept consistent with the sources of sphcore and its plugins.
 
 numba keys each cached function on its own source file only. Code it compiled into that
-function from another module (a call, or ``inline="always"``, such as
-:func:`sphcore.physics.wall_completion.complete_at_wall` inside the pair loop of
-:mod:`sphcore.physics.equations`) is not checked: after an edit of the callee's file the caller's
-cache keeps the old machine code, silently. Measured 2026-11-24: an edit of
-``wall_completion.py`` had no effect on a run until ``equations.py`` was touched.
+function from another module (a call, or ``inline="always"``, such as the pair loop's
+kernels of :mod:`sphcore.physics.pairterms` inside :mod:`sphcore.physics.equations`) is
+not checked: after an edit of the callee's file the caller's cache keeps the old machine
+code, silently (an edited inlined function had no effect on a run until the caller's file
+was touched).
 
 :func:`refresh` runs once per process (:func:`sphcore.jit.prepare`), before any compiled function is called:
 it compares a stamp of every Python source file of sphcore and of its plugins (path,

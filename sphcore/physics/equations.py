@@ -29,7 +29,7 @@ v_ij = v_i - v_j, grad_i W_ij = F_ij x_ij (see :mod:`sphcore.physics.kernels`):
   with G_w the wall gradient the plugin supplies (the exact G corrected for the lattice
   error of the truncated sum) and A_w g the discrete complement of the particle's own first
   moment along the walls' normals, lambda (T g + s g) along them; see
-  :func:`sphcore.physics.wall_completion.complete_at_wall`.
+  the function of the ``sph_wall_completion`` hook, compiled into the pair loop.
 - Tait equation of state: :mod:`sphcore.physics.eos`.
 
 eta^2 = 0.01 h^2 keeps the denominators finite. Arguments are structured: ``src``
@@ -63,7 +63,6 @@ from sphcore.physics.pairterms import (
     scatter,
     terms,
 )
-from sphcore.physics.wall_completion import complete_at_wall
 
 PAIRS_PARALLEL_MIN = 1000  # particles: the pair loop runs serial below (one thread is faster)
 
@@ -98,9 +97,10 @@ class WallTerms(NamedTuple):
 DIM = None
 WALLS = None
 THREE_PASS = None  # walk a particle's partners in three passes (sphcore.physics.pairterms): in 3D
+COMPLETE = None  # the wall model's completion of a particle's sums (sph_wall_completion), inlined
 
 
-def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
+def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth, completion=None):
     """Accelerations acc (n_dest, dim) in m/s^2 and density rates drho (n_dest,) in kg/m^3/s.
 
     Every interacting pair is evaluated once and applied to both particles (Newton's third
@@ -119,7 +119,9 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     (Batchelor 1967). ``prm.kernel_gradient``: the kernel gradient is corrected with the
     symmetrised Bonet & Lok matrix (L_i + L_j)/2 (antisymmetric in i, j, so momentum is
     still conserved); sources beyond ``L.shape[0]`` use the identity. ``wall``: see the
-    module docstring.
+    module docstring; with ``wall.active``, ``completion`` is the wall model's compiled
+    completion of a particle's sums (the ``sph_wall_completion`` hook), inlined into the
+    loop.
 
     The pair loop is compiled once per dimension and for runs with and without wall terms
     (``_RATES``), each a constant of its build: 0.44 -> 0.35-0.36 ms per call of the seed's
@@ -128,7 +130,16 @@ def sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
     in one fused loop, 3D in three passes whose middle one is vectorised (the measurements
     are in :mod:`sphcore.physics.pairterms`), the same bits either way.
     """
-    _RATES[src.pos.shape[1], bool(wall.active)](n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth)
+    dim = src.pos.shape[1]
+    if wall.active:
+        if completion is None:
+            raise ValueError("wall terms are active but no wall completion was given")
+        rates = _RATES.get((dim, completion))
+        if rates is None:
+            rates = _RATES[dim, completion] = _build(dim, completion)
+    else:
+        rates = _RATES[dim, None]
+    rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth)
 
 
 def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
@@ -270,16 +281,22 @@ def _slab_pairs(c_first, c_end, n_dest, src, grid, prm, L, wall, acc, drho, work
 
 
 @njit(cache=True, inline="always")
+def _no_completion(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam):
+    """The completion of a run without wall terms (never called: WALLS is false there)."""
+    return a0, a1, a2, dr
+
+
 def _finish(i, dim, walls, src, prm, wall, acc, drho, work):
-    """Gravity and the wall completion of particle i, after all pairs."""
+    """Gravity and the wall completion (COMPLETE, a constant of each twin) of particle i,
+    after all pairs."""
     rho, gravity = src.rho, prm.gravity
     a0 = acc[i, 0]
     a1 = acc[i, 1]
     a2 = acc[i, 2] if dim == 3 else 0.0
     dr = drho[i]
     if walls and wall.share[i] > 0.0:
-        a0, a1, a2, dr = complete_at_wall(wall, i, dim, src.vel, rho[i], src.p[i], prm.rho_ref, prm.moment_norm,
-                                           gravity, a0, a1, a2, dr, work[i, W_B], work[i, W_B + 1], work[i, W_B + 2], work[i, W_GAMMA])
+        a0, a1, a2, dr = COMPLETE(wall, i, dim, src.vel, rho[i], src.p[i], prm.rho_ref, prm.moment_norm,
+                                  gravity, a0, a1, a2, dr, work[i, W_B], work[i, W_B + 1], work[i, W_B + 2], work[i, W_GAMMA])
     gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
     acc[i, 0] = gscale * gravity[0] + a0
     acc[i, 1] = gscale * gravity[1] + a1
@@ -297,27 +314,45 @@ def uniform_acceleration(gravity, acc):
             acc[i, d] = gravity[d]
 
 
-# the pair loop compiled per dimension and with or without wall terms: DIM, WALLS and
-# THREE_PASS are constants in each twin (sphcore.jit.parallel.twin); numba compiles each on its
-# first call
+# the pair loop compiled per dimension and with or without wall terms: DIM, WALLS,
+# THREE_PASS and COMPLETE are constants in each twin (sphcore.jit.parallel.twin); numba
+# compiles each on its first call. Runs without wall terms share one twin per dimension;
+# a wall model's twin is built when its run first needs it
 
 
-def _build(dim: int, walls: bool, three_pass: bool | None = None):
-    """The pair loop's twin for ``dim`` and ``walls``; ``three_pass`` (default: in 3D) walks
-    the partners in three passes, else fused (the other walk is built by the tests only, to
-    check that both give the same bits)."""
+def completion_tag(completion) -> str:
+    """The part of a twin's name that identifies a wall completion: its module and name
+    and a digest of its bytecode and constants, so that numba's disk cache (indexed by the
+    twin's name) never serves a pair loop compiled with another completion or an older
+    version of this one."""
+    import hashlib
+
+    py = getattr(completion, "py_func", completion)
+    code = py.__code__
+    digest = hashlib.sha256(code.co_code + repr(code.co_consts).encode()).hexdigest()[:12]
+    return f"{py.__module__}.{py.__qualname__}".replace(".", "_").replace("<", "_").replace(">", "_") + "_" + digest
+
+
+def _build(dim: int, completion=None, three_pass: bool | None = None):
+    """The pair loop's twin for ``dim``, with the wall ``completion`` compiled in (None:
+    without wall terms); ``three_pass`` (default: in 3D) walks the partners in three passes,
+    else fused (the other walk is built by the tests only, to check that both give the same
+    bits)."""
     three = dim == 3 if three_pass is None else three_pass
-    name = f"_{dim}d" + ("_walls" if walls else "") + ("" if three == (dim == 3) else ("_three" if three else "_fused"))
+    walls = completion is not None
+    name = f"_{dim}d" + (f"_walls_{completion_tag(completion)}" if walls else "") + (
+        "" if three == (dim == 3) else ("_three" if three else "_fused"))
+    finish = njit(cache=True, inline="always")(twin(_finish, name, COMPLETE=completion if walls else _no_completion))
     # error_model="numpy" in every twin, 2D and 3D, and in the passes before and after the
     # pairs (_prepare, _finish, inlined here): a float division by zero gives inf instead of
     # raising, so that the three-pass loop, which divides, can be vectorised (the checks
     # after the step catch what is not finite)
     pairs = njit(cache=True, error_model="numpy")(twin(_slab_pairs, name, DIM=dim, WALLS=walls, THREE_PASS=three))
     return njit(cache=True, parallel=True, error_model="numpy")(
-        twin(_sph_rates, name, DIM=dim, WALLS=walls, THREE_PASS=three, _slab_pairs=pairs))
+        twin(_sph_rates, name, DIM=dim, WALLS=walls, THREE_PASS=three, _slab_pairs=pairs, _finish=finish))
 
 
-_RATES = {(dim, walls): _build(dim, walls) for dim in (2, 3) for walls in (False, True)}
+_RATES = {(dim, None): _build(dim) for dim in (2, 3)}
 
 
 def compiled_on_disk(dim: int) -> bool:

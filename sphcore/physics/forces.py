@@ -14,7 +14,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from sphcore.errors import Instability
+from sphcore.errors import CaseError, Instability
 from sphcore.neighbours.cellgrid import CellGrid
 from sphcore.neighbours.pairlist import PairList
 from sphcore.physics import eos
@@ -63,12 +63,27 @@ class PressureField:
         counters["eos"] += 1
 
 
+def wall_completion(ctx, hook):
+    """The compiled completion of a particle's sums that the run's wall model supplies
+    (``sph_wall_completion``): one function, however many plugins supply wall terms."""
+    found = []
+    for fn in hook.sph_wall_completion(dim=ctx.params.dim):
+        if fn is not None and all(fn is not f for f in found):
+            found.append(fn)
+    if len(found) != 1:
+        what = "none" if not found else ", ".join(f"{f.__module__}.{f.__name__}" for f in found)
+        raise CaseError(getattr(ctx.case, "file", "case.toml"), "plugins.use", "the plugins that supply wall terms (sph_wall_terms) must "
+                        f"supply one wall completion (sph_wall_completion); they supply {what}")
+    return found[0]
+
+
 class Forces:
     """Evaluates rates for one run. ``hook``: the run's :class:`sphcore.plugin.pluginhost.HookRelay`."""
 
     def __init__(self, ctx, hook, pressure: PressureField):
         self.ctx, self.hook, self.pressure = ctx, hook, pressure
         self.wants_walls = "sph_wall_terms" in hook.implemented
+        self.completion = wall_completion(ctx, hook) if self.wants_walls else None
         self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
         self._L = np.zeros((1, 3, 3))
         self._grid = None
@@ -208,7 +223,7 @@ class Forces:
                 counters["kernel_gradient_correction"] += 1
             n_src = src.pos.shape[0]
             sph_rates(st.n, src, view, prm, self._L, wall, acc, drho, self._work[:n_src], self._spos[:n_src],
-                      numba.get_num_threads())
+                      numba.get_num_threads(), self.completion)
             counters["continuity"] += 1
             counters["momentum"] += 1
             if prm.alpha > 0 or prm.beta > 0:

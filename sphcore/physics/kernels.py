@@ -80,7 +80,7 @@ def lattice_moment(kernel_id: int, h: float, dx: float, dim: int) -> float:
     symmetry), e.g. 0.974 for Wendland C2 at h = 1.3 dx in 2D and 0.999 at h = 2 dx. An
     interior particle in a hydrostatic field is held up by lambda rho g, so a wall that
     completes the missing support should supply lambda of the continuum moment too
-    (:func:`sphcore.physics.wall_completion.complete_at_wall`).
+    (the wall_integral plugin's completion, :func:`sphcore_plugins.wall_integral.completion.complete_at_wall`).
     """
     n = int(math.ceil(SUPPORT * h / dx))
     k = np.arange(-n, n + 1, dtype=np.float64) * dx

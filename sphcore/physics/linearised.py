@@ -12,7 +12,7 @@ The boundary's after-step correction (the reflective contact) is not a rate and 
 The artificial viscosity acts on approaching pairs only, so at rest the rates are not
 differentiable in the velocities: J holds the mean of the two sides (half the viscosity of
 an approaching pair), and the damping read from it is that mean's. The wall model's fill
-min(1, Gamma_i / Gamma_lattice) (:mod:`sphcore.physics.wall_completion`) has such a kink at the
+min(1, Gamma_i / Gamma_lattice) (:mod:`sphcore_plugins.wall_integral.completion`) has such a kink at the
 initial lattice: there J holds the mean of the two sides as well.
 
 About a state at rest the eigenvalues lambda of J say how a disturbance evolves,

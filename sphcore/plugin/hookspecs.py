@@ -106,7 +106,35 @@ def sph_wall_terms(ctx, terms):
     completion by the particle's own sum over it; leave 0 for no scaling). Add (``+=``) what
     your walls contribute to share, grad, hydro and fill, and widen the projector to your
     walls' normals, so that several wall plugins combine. The core then completes the
-    continuity and momentum sums with them (see :mod:`sphcore.physics.wall_completion`).
+    continuity and momentum sums with them through the function that a plugin returns from
+    ``sph_wall_completion``.
+    """
+
+
+@hookspec
+def sph_wall_completion(dim):
+    """Return the compiled function that adds the wall terms to a particle's rates, or None.
+
+    A plugin that implements ``sph_wall_terms`` says here how its terms enter the SPH
+    equations. The core compiles the function into its pair loop (inlined: it runs once
+    per particle near a wall, after the particle's pairs) for a ``dim``-dimensional run;
+    every plugin that returns one must return the same function. The function is a numba
+    ``@njit(inline="always")`` function
+
+        complete(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity,
+                 a0, a1, a2, dr, b0, b1, b2, gamma) -> (a0, a1, a2, dr)
+
+    of the particle's :class:`sphcore.physics.equations.WallTerms` ``wall`` (row ``i``), the
+    velocities ``vel``, the particle's density and pressure, the reference density
+    (:attr:`Params.rho_ref`), the lattice normalisation ``lam`` (:attr:`Params.moment_norm`)
+    and gravity; (a0, a1, a2, dr) are the particle's acceleration and density rate from its
+    pairs, (b0, b1, b2) the sum sum_j V_j (x_ij . g) grad W_ij (the discrete first moment of
+    its support applied to g, B g), and ``gamma`` its neighbour sum sum_j V_j W_ij (self
+    excluded); the pair loop sums both for particles with ``wall.share > 0`` only. It returns
+    the completed rates. The wall_integral plugin's
+    :func:`sphcore_plugins.wall_integral.completion.complete_at_wall` is the example.
+    Numba caches the pair loop under a name derived from the function's module, name and
+    bytecode, so an edited completion is compiled afresh.
     """
 
 

@@ -1,7 +1,9 @@
 """The wall completion of a particle's SPH sums: what boundary-integral walls add to the
 rates once the pair loop (:func:`sphcore.physics.equations.sph_rates`) has summed the particle's
-neighbours. The terms and their derivation are in :func:`complete_at_wall`; the plugins
-supply them through :class:`sphcore.physics.equations.WallTerms`.
+neighbours. The terms and their derivation are in :func:`complete_at_wall`; the plugin
+computes the wall integrals it uses (:class:`sphcore.physics.equations.WallTerms`) in
+``sph_wall_terms`` and hands the core this function in ``sph_wall_completion``, which the
+core compiles into its pair loop.
 """
 
 from __future__ import annotations
