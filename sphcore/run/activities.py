@@ -7,7 +7,7 @@ due. A run holds two lists of them and nothing else decides timing:
   particles by cell (``neighbours.sort_every``) and the Shepard density filter
   (``corrections.shepard_every``), in that order;
 - after a step (:func:`sphcore.run.runner.run`): the thread tuner (every step: it times
-  them), the progress display, the periodic checkpoint (``output.checkpoint_every_s`` of
+  them), the progress display (its lines or redraws on a :class:`WallInterval`), the periodic checkpoint (``output.checkpoint_every_s`` of
   wall time and/or ``output.checkpoint_every_dt`` of simulated time).
 
 Output writers are plugins: each owns its schedule and its file
@@ -66,7 +66,11 @@ class WallInterval:
         self.seconds = seconds
         self.last = time.monotonic()
 
-    def due(self, clock) -> bool:
+    def restart(self):
+        """Count the interval from now."""
+        self.last = time.monotonic()
+
+    def due(self, clock=None) -> bool:
         now = time.monotonic()
         if now - self.last < self.seconds:
             return False

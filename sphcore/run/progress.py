@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 import time
 
+from sphcore.run.activities import WallInterval
+
 
 class Progress:
     """Shows simulated time, ETA, steps per second and particle-steps per second."""
@@ -14,7 +16,9 @@ class Progress:
         if mode == "auto":
             mode = "bar" if self.stream.isatty() else "log"
         self.mode, self.t_end, self.n, self.interval = mode, t_end, n, interval_s
-        self.start = self.last_log = self.last_draw = time.perf_counter()
+        # when a line is due (log) or a redraw (bar: at most ten a second)
+        self.schedule = WallInterval(0.1 if mode == "bar" else interval_s)
+        self.start = time.perf_counter()
         self.steps0 = None
         self.t0 = 0.0  # simulated time at the first update (a restart starts later)
         self.bar = None
@@ -30,11 +34,14 @@ class Progress:
         return steps / el, steps * self.n / el
 
     def update(self, sim):
+        """After a step: the first call starts the clocks, later ones draw or log when
+        ``schedule`` is due."""
         if self.steps0 is None:
             # rates and the ETA count from the end of the first step: that step compiles the
             # kernels on a first run (~10 s), which would otherwise inflate the first ETA
             self.steps0, self.t0 = sim.step, sim.t
-            self.start = self.last_log = self.last_draw = time.perf_counter()
+            self.start = time.perf_counter()
+            self.schedule.restart()
             if self.bar is not None:  # tqdm's own clock and rate start here too
                 self.bar.reset(total=self.t_end)
                 self.bar.initial = self.bar.n = min(sim.t, self.t_end)
@@ -42,26 +49,23 @@ class Progress:
             return
         if self.mode == "off":
             return
+        if not self.schedule.due() and not (self.bar is not None and sim.t >= self.t_end):
+            return  # the last state is always drawn
         now = time.perf_counter()
         if self.bar is not None:
-            if now - self.last_draw < 0.1 and sim.t < self.t_end:
-                return  # redraw at most ten times a second
-            self.last_draw = now
             sps, psps = self.rates(sim.step)
             self.bar.n = min(sim.t, self.t_end)
             self.bar.set_postfix_str(f"{sps:.0f} steps/s, {psps:.3g} particle-steps/s", refresh=False)
             self.bar.refresh()
             return
-        if now - self.last_log >= self.interval:
-            self.last_log = now
-            sps, psps = self.rates(sim.step)
-            frac = sim.t / self.t_end
-            done = (sim.t - self.t0) / max(self.t_end - self.t0, 1e-300)  # of this process's share
-            eta = (now - self.start) * (1 - done) / done if done > 0 else float("nan")
-            eta_text = f"{eta:.0f}" if eta < 1e7 else f"{eta:.2g}"  # never a 300-digit number
-            print(f"[sph] t = {sim.t:.5g}/{self.t_end:.5g} s ({100 * frac:.1f}%), step {sim.step}, "
-                  f"dt = {sim.dt:.3g} s, {sps:.0f} steps/s, {psps:.3g} particle-steps/s, ETA {eta_text} s",
-                  file=self.stream, flush=True)
+        sps, psps = self.rates(sim.step)
+        frac = sim.t / self.t_end
+        done = (sim.t - self.t0) / max(self.t_end - self.t0, 1e-300)  # of this process's share
+        eta = (now - self.start) * (1 - done) / done if done > 0 else float("nan")
+        eta_text = f"{eta:.0f}" if eta < 1e7 else f"{eta:.2g}"  # never a 300-digit number
+        print(f"[sph] t = {sim.t:.5g}/{self.t_end:.5g} s ({100 * frac:.1f}%), step {sim.step}, "
+              f"dt = {sim.dt:.3g} s, {sps:.0f} steps/s, {psps:.3g} particle-steps/s, ETA {eta_text} s",
+              file=self.stream, flush=True)
 
     def close(self):
         if self.bar is not None:
