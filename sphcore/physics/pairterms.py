@@ -12,16 +12,12 @@ walks a particle's partners with them.
 Both compute each term with the same arithmetic (:func:`pair_terms`) and add them in the
 same order: the same bits. Which pays depends on how many partners a particle has: each
 pair is evaluated once, so a particle has ~10 partners in 2D at h = 1.3 dx and ~37 in 3D.
-On a frozen state, one thread (``benchmarks/tools/bench_pair_ab.py`` against the fused loop of
-main, rounds alternating; fastest calls / median of rounds; 2026-11-26, a quiet moment of
-the 2-vCPU Xeon): three passes took 0.77-0.83 / 0.81-0.84 of the fused loop's time in 3D
-(the seed's 3D dam break at t = 0.01 s, 16,384 particles, two runs of 10 rounds); this
-module's fused loop 0.98-1.30 / 1.05-1.27 in 2D (PySPH's dam break, two runs of 20
-rounds), and three passes in 2D 1.04-1.15 / 1.03-1.24 in an earlier, noisier hour: the
-copies cost what the vector instructions save. A/A runs read 0.91-1.05 / 0.92-0.99. The
-2D figure of 1.30 was not explained; after the merge, against the fused loop as it was
-before this module (commit 855a843, two runs of 21 rounds): 1.04 / 1.03 and 0.95 / 0.94,
-with A/A runs between them at 0.92 / 0.96 and 0.98 / 1.02: no difference seen in 2D.
+Measured on a frozen state, one thread, on a quiet 2-vCPU Xeon
+(``benchmarks/tools/bench_pair_ab.py``: rounds alternating, fastest calls and median of
+rounds): in 3D three passes take 0.77-0.84 of the fused walk's time (the 3D dam break at
+t = 0.01 s, 16,384 particles); in 2D (PySPH's dam break) the two walks are within the
+A/A spread (0.91-1.05): the copies cost what the vector instructions save, so 2D stays
+fused.
 
 Constants of the pair terms are passed as one tuple ``k`` (:func:`constants`).
 """

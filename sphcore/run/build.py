@@ -161,14 +161,14 @@ def _hydrostatic_start(case, prm, st, tops):
     uniform lattice: the fluid's extra mass at depth is in the masses, not in a closer
     spacing.
 
-    Until 2026-11-24 the pressure was rho0 g d and the masses rho0 dx^dim. The pressure
-    sums of a uniform lattice of equal masses then see the density stratification only
-    through the p_j / rho_j^2 of the momentum equation: in a 1 m tank of plain Tait water at
-    h = 1.5 dx the interior's vertical acceleration drifted from -0.004 g under the free
-    surface to -0.018 g at the bottom, and a particle along a side wall differed from its
-    interior neighbours by up to 0.004 g (a shear the wall's terms do not carry). Now both
-    are -0.0026 g everywhere below the free surface's reach ((lambda - 1) g, the lattice
-    normalisation), walls included (``tests/test_hydrostatic_start.py``).
+    Why the masses carry the stratification: with the pressure rho0 g d and equal masses
+    rho0 dx^dim, the pressure sums of a uniform lattice see the density stratification only
+    through the p_j / rho_j^2 of the momentum equation. In a 1 m tank of plain Tait water at
+    h = 1.5 dx the interior's vertical acceleration then drifts from -0.004 g under the free
+    surface to -0.018 g at the bottom, and a particle along a side wall differs from its
+    interior neighbours by up to 0.004 g (a shear the wall's terms do not carry). With this
+    start both are -0.0026 g everywhere below the free surface's reach ((lambda - 1) g, the
+    lattice normalisation), walls included (``tests/test_hydrostatic_start.py``).
     """
     fluid = st.kind == FLUID
     p = eos.hydrostatic_pressure(tops[fluid] - st.pos[fluid] @ prm.up, prm.rho0, prm.c0, prm.gamma, prm.g_abs)
