@@ -173,7 +173,7 @@ class NetcdfWriter(ScheduledWriter):
         """Append the current state as the next frame and sync it to disk."""
         if ctx.output_dir is None:
             raise OutputError("netcdf: this run has no output directory")
-        st = ctx.state
+        st = ctx.host()
         order = np.argsort(st.id, kind="stable")
         if self.ds is None:
             if st.n == 0:  # a netCDF dimension of length 0 would be a second unlimited one

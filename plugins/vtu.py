@@ -203,7 +203,7 @@ class VtuWriter(ScheduledWriter):
             replace_atomically(out / f"{name}_walls.vtu",
                                lambda tmp: meshio.write(tmp, wmesh, file_format="vtu", binary=True))
         # binary: base64 of the raw float64 bytes, so the file holds exact values
-        frame = vtu_text(*frame_arrays(ctx.state), compress=self.compress)
+        frame = vtu_text(*frame_arrays(ctx.host()), compress=self.compress)
         replace_atomically(path, lambda tmp: tmp.write_text(frame))
         self.frames.append((float(ctx.t), rel))
         collection = pvd_text(self.frames)

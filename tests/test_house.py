@@ -131,3 +131,16 @@ def test_the_top_level_of_sphcore_is_small():
     entries = sorted(p.name for p in SPHCORE.iterdir() if p.name != "__pycache__")
     assert len(entries) <= 15, entries
     assert {p.stem for p in SPHCORE.glob("*.py")} == TOP | {"errors"}
+
+
+#: what takes the particles out of a run: it reads them through RunState.host / RunContext.host
+#: (sphcore.run.state), never the run's own arrays, so that those arrays may live elsewhere
+LEAVES_THE_RUN = ["plugins/vtu.py", "plugins/netcdf.py", "sphcore/run/checkpoint.py"]
+
+
+@pytest.mark.parametrize("file", LEAVES_THE_RUN)
+def test_what_writes_particles_out_reads_host_arrays(file):
+    tree = ast.parse((ROOT / file).read_text())
+    bad = [f"{file}:{node.lineno}: {ast.unparse(node)}" for node in ast.walk(tree)
+           if isinstance(node, ast.Attribute) and node.attr in ("state", "particles")]
+    assert not bad, "particles read without host():\n" + "\n".join(bad)

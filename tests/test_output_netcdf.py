@@ -38,6 +38,7 @@ def make_sim(tmp_path, dim=2, every_dt=None, every_steps=None, seed=0):
     out = tmp_path / "output"
     out.mkdir()
     sim = SimpleNamespace(state=st, t=0.0, step=0, dt=0.004, case=case, output_dir=out, stats={}, restarting=False)
+    sim.host = lambda: sim.state  # a writer reads the particles through host()
     shuffle(sim, rng)
     return sim, rng
 
@@ -249,6 +250,7 @@ def test_killed_run_keeps_synced_frames(tmp_path):
         st = make_block(lattice([0, 0], [1, 1], 0.1), [0.0, 0.0], 1000.0, 0.1, 0.05, 0)
         case = SimpleNamespace(name="x", dim=2, file="case.toml", config={})
         sim = SimpleNamespace(state=st, t=0.0, step=0, case=case, output_dir=Path(sys.argv[1]), stats={}, restarting=False)
+        sim.host = lambda: sim.state  # a writer reads the particles through host()
         w = NetcdfWriter()
         for i in range(3):
             sim.t, sim.step = 0.01 * i, i
@@ -293,6 +295,7 @@ def test_disk_full_keeps_earlier_frames_readable(tmp_path):
         st = make_block(lattice([0, 0], [1, 1], 0.05), [0.0, 0.0], 1000.0, 0.05, 0.025, 0)
         case = SimpleNamespace(name="x", dim=2, file="case.toml", config={})
         sim = SimpleNamespace(state=st, t=0.0, step=0, case=case, output_dir=Path(sys.argv[1]), stats={}, restarting=False)
+        sim.host = lambda: sim.state  # a writer reads the particles through host()
         w = NetcdfWriter()
         # a file-size limit is a disk that fills up: writes past it fail with EFBIG.
         # 400 particles: ~10 kB header and static data, ~19 kB a frame; 60 000 bytes

@@ -73,6 +73,11 @@ class RunContext:
     def state(self):
         return self.run.particles
 
+    def host(self):
+        """The particles as host numpy arrays, read-only: what a writer puts in its files
+        (:meth:`sphcore.run.state.RunState.host`)."""
+        return self.run.host()
+
     @property
     def walls(self):
         """The wall planes (the same object as :attr:`planes`; kept for plugins written

@@ -18,6 +18,13 @@ the start-up probe (:mod:`sphcore.run.budget`) takes a :meth:`RunState.snapshot`
 evaluates the first rates and puts it back with :meth:`RunState.restore`. Arrays are only
 read and written through numpy's array interface here, so that they could live on another
 device behind the same methods.
+
+Where the arrays live: on the host today. Two kinds of code read them. The kernels (the
+core's and the boundary plugins') take the arrays as they are, where they are; a device
+backend gives them device arrays and device kernels together. Everything that takes the
+particles out of the run (the particle writers, the checkpoint's payload) asks for
+:meth:`RunState.host`, the particles as host numpy arrays, and never reads
+``particles`` directly, so that those paths need no change when the arrays move.
 """
 
 from __future__ import annotations
@@ -86,6 +93,11 @@ class RunState:
         self.pairs = None
         self._anchor = None  # a pair-list anchor read from a checkpoint, until a pair list is attached
 
+    def host(self) -> ParticleState:
+        """The particles as numpy arrays in host memory, for what leaves the run (files,
+        checkpoints). Read-only by contract; today the particles themselves (no copy)."""
+        return self.particles
+
     # -- pieces ---------------------------------------------------------------------------
 
     def fit_rates(self) -> bool:
@@ -143,7 +155,7 @@ class RunState:
     def payload(self) -> tuple[dict, dict[str, np.ndarray]]:
         """(metadata, arrays) of a checkpoint: every particle array, the rates, the pair-list
         anchor, each plugin's kept arrays; the clock, stats, kept values and counters."""
-        arrays = {f"state_{name}": a for name, a in self.particles.arrays()}
+        arrays = {f"state_{name}": a for name, a in self.host().arrays()}
         arrays["acc"] = self.rates.acc
         arrays["drho"] = self.rates.drho
         anchor = self.anchor()
