@@ -30,19 +30,19 @@ def _motions(dim):
     axis = _unit([0.3, -0.5, 0.8]) if dim == 3 else None
     centre = rng.normal(0, 0.3, dim)
     ramp = Ramp(0.2, 0.6)
-    parts = {
-        "velocity": ConstantVelocity(rng.normal(0, 1.0, dim)),
-        "sine": SineTranslation(_unit(rng.normal(0, 1, dim)), 0.05, 2 * math.pi / 1.63, 0.4),
-        "series": TranslationSeries(series),
-    }
-    rots = {"sine": SineRotation(math.radians(4.0), 2 * math.pi / 1.63, 0.3), "series": RotationSeries(angles)}
     out = []
     for r in (Ramp(), ramp):
+        parts = {
+            "velocity": ConstantVelocity(rng.normal(0, 1.0, dim), r),
+            "sine": SineTranslation(_unit(rng.normal(0, 1, dim)), 0.05, 2 * math.pi / 1.63, 0.4, r),
+            "series": TranslationSeries(series, r),
+        }
+        rots = {"sine": SineRotation(math.radians(4.0), 2 * math.pi / 1.63, 0.3, r), "series": RotationSeries(angles, r)}
         for name, part in parts.items():
-            out.append((f"{name} {r}", Motion(dim, (part,), ramp=r)))
+            out.append((f"{name} {r}", Motion(dim, (part,))))
         for name, rot in rots.items():
-            out.append((f"rotation {name} {r}", Motion(dim, (), rot, centre, axis, r)))
-        out.append((f"all {r}", Motion(dim, tuple(parts.values()), rots["sine"], centre, axis, r)))
+            out.append((f"rotation {name} {r}", Motion(dim, (), rot, centre, axis)))
+        out.append((f"all {r}", Motion(dim, tuple(parts.values()), rots["sine"], centre, axis)))
     return out
 
 
@@ -118,7 +118,7 @@ def test_the_ramp_is_smooth_and_its_integral_is_right():
 
 
 def test_a_constant_velocity_reaches_its_speed_without_overshoot():
-    m = Motion(2, (ConstantVelocity(np.array([0.3, 0.0])),), ramp=Ramp(0.0, 1.0))
+    m = Motion(2, (ConstantVelocity(np.array([0.3, 0.0]), Ramp(0.0, 1.0)),))
     speeds = [m.pose(t).velocity[0] for t in np.linspace(0, 2, 201)]
     assert max(speeds) == pytest.approx(0.3) and np.all(np.diff(speeds) >= -1e-15)
     assert m.pose(2.0).shift[0] == pytest.approx(0.3 * (2.0 - 0.5))

@@ -20,6 +20,8 @@ CORE: dict[str, dict[str, O]] = {
         "planes": O([], "table_list", doc="extra wall planes: {normal = [...], point = [...]}; the normal points into the fluid"),
         "walls": O([], "table_list", doc="finite walls: boxes, polygons, polylines and mesh files (keys: WALL); "
                    "obstacles inside the planes' region, or a closed tank of their own"),
+        "motion": O([], "table_list", doc="prescribed motion of the tank (every plane, and the walls with tank = "
+                    "true): parts that add up (keys: sphcore.case.motion.PART); none: the tank is fixed"),
     },
     # [[blocks]] is an array of tables; each entry is checked against BLOCK below.
     "blocks": O([], "table_list", doc="particle blocks filled on a lattice of spacing dx"),
@@ -151,6 +153,9 @@ WALL: dict[str, O] = {
               "directory; 3D: triangles or polygons, 2D: lines or a triangulated region", nullable=True),
     "fluid": O("outside", "str", doc="closed walls: where the fluid is: outside (an obstacle) or inside "
                "(the walls are the tank)", choices=("outside", "inside")),
+    "tank": O(False, "bool", doc="the wall moves with the tank ([[domain.motion]])"),
+    "motion": O([], "table_list", doc="prescribed motion of this wall alone: parts that add up (keys: "
+                "sphcore.case.motion.PART); none: fixed (or moving with the tank)"),
 }
 
 #: keys of one ``[[domain.planes]]`` entry

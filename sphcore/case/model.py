@@ -20,9 +20,11 @@ import numpy as np
 from sphcore.case import defaults
 from sphcore.case.options import check_value, validate_table
 from sphcore.case.overrides import fold, parse_set
+from sphcore.case.motion import parse_motion
 from sphcore.case.walls import parse_walls
 from sphcore.errors import CaseError
 from sphcore.geometry.faces import Faces
+from sphcore.geometry.motion import MovingGroup
 from sphcore.geometry.planes import Planes, recession_direction
 
 CASE_FILE = "case.toml"
@@ -39,6 +41,7 @@ class Case:
     blocks: list = field(default_factory=list)
     faces: Faces | None = None  # finite walls ([[domain.walls]]); None or empty without
     restart_keys: frozenset = frozenset()  # "table.key" of plugin options that may change on --restart
+    moving: tuple = ()  # wall groups with a prescribed motion (sphcore.geometry.motion.MovingGroup)
 
     def __post_init__(self):
         if self.faces is None:
@@ -241,14 +244,32 @@ def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
         raise CaseError(file, "physics.gravity", f"expected at least {dim} components")
     if cfg["checks"]["rho_min"] >= cfg["checks"]["rho_max"]:
         raise CaseError(file, "checks.rho_max", "expected a value above checks.rho_min")
-    faces = parse_walls(file, cfg["domain"]["walls"], dim, Path(file).parent)
+    faces, ranges = parse_walls(file, cfg["domain"]["walls"], dim, Path(file).parent)
+    moving = _moving_groups(file, cfg, dim, ranges)
     tank = any(sign < 0 for _, _, sign in faces.groups)
     planes = _planes(file, cfg, dim, bounded_by_walls=tank)
     blocks = _blocks(file, cfg, dim)
     restart_keys = frozenset(f"{table}.{key}" for table, schema in plugin_schemas.items()
                              for key, opt in schema.items() if opt.restart)
     return Case(file=Path(file), dir=Path(file).parent, config=cfg, planes=planes, blocks=blocks,
-                faces=faces, restart_keys=restart_keys)
+                faces=faces, restart_keys=restart_keys, moving=moving)
+
+
+def _moving_groups(file, cfg, dim, ranges) -> tuple[MovingGroup, ...]:
+    """The wall groups with a prescribed motion: the tank (its planes and the walls with
+    tank = true) and each wall with a motion of its own; fixed walls are in none."""
+    t_end, case_dir, walls = cfg["time"]["t_end"], Path(file).parent, cfg["domain"]["walls"]
+    groups = []
+    tank = parse_motion(file, "domain.motion", cfg["domain"]["motion"], dim, case_dir, t_end)
+    if tank is not None:
+        faces = [np.arange(*ranges[k]) for k, w in enumerate(walls) if w.get("tank", False)]
+        groups.append(MovingGroup("domain.motion", tank, True,
+                                  np.concatenate(faces).astype(np.int64) if faces else np.zeros(0, np.int64)))
+    for k, w in enumerate(walls):
+        m = parse_motion(file, f"domain.walls[{k}].motion", w.get("motion", []), dim, case_dir, t_end)
+        if m is not None:
+            groups.append(MovingGroup(f"domain.walls[{k}].motion", m, False, np.arange(*ranges[k], dtype=np.int64)))
+    return tuple(groups)
 
 
 def case_file(case_dir) -> Path:

@@ -55,9 +55,11 @@ def _cross(s, t):
             and orient(t[0], t[1], s[0]) * orient(t[0], t[1], s[1]) <= 0)
 
 
-def parse_walls(file, entries, dim, case_dir) -> Faces:
-    """Faces of every ``[[domain.walls]]`` entry, in order."""
+def parse_walls(file, entries, dim, case_dir) -> tuple[Faces, list[tuple[int, int]]]:
+    """Faces of every ``[[domain.walls]]`` entry, in order, and each entry's faces
+    (start, stop)."""
     faces = Faces.empty(dim)
+    ranges = []
     for k, entry in enumerate(entries):
         key = f"domain.walls[{k}]"
         w = validate_table(defaults.WALL, entry, file, key)
@@ -65,6 +67,9 @@ def parse_walls(file, entries, dim, case_dir) -> Faces:
         inside = w["fluid"] == "inside"
         if shape is None:
             raise CaseError(file, f"{key}.shape", "required: box, polygon, polyline or mesh")
+        if w["tank"] and w["motion"]:
+            raise CaseError(file, f"{key}.motion", "a wall that moves with the tank (tank = true) has no motion "
+                            "of its own")
         need = {"box": ("min", "max"), "polygon": ("points",), "polyline": ("points",), "mesh": ("file",)}[shape]
         for name in ("min", "max", "points", "file"):
             if name not in need and w[name] is not None:
@@ -99,5 +104,6 @@ def parse_walls(file, entries, dim, case_dir) -> Faces:
             verts = read_wall_mesh(path, dim, f"{key}.file", file)
             check_closed(verts, path, f"{key}.file", file)
             part = closed_wall(verts, inside)
+        ranges.append((faces.count, faces.count + part.count))
         faces = faces.concat(part)
-    return faces
+    return faces, ranges

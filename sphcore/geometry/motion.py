@@ -19,7 +19,7 @@ in closed form, so the velocity and the acceleration are those of the position t
 are drawn at, to round-off: a time series is a natural cubic spline through its samples
 (C2: the acceleration is continuous), never differences of positions.
 
-A ramp (start, duration) multiplies each oscillation's and series' value by the quintic
+A part's ramp (start, duration) multiplies each oscillation's and series' value by the quintic
 smooth step s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5 (tau = (t - start) / duration,
 clipped to [0, 1]), whose first two derivatives vanish at both ends, so that a wave maker
 or a tank starts without a jump in velocity or acceleration; a constant velocity is ramped
@@ -137,10 +137,11 @@ class ConstantVelocity:
     """D = velocity * (t - ramp.start), the velocity ramped (m/s)."""
 
     velocity: np.ndarray
+    ramp: Ramp = Ramp()
 
-    def translation(self, t: float, ramp: Ramp):
-        s, s1, _ = ramp.value(t)
-        return self.velocity * ramp.integral(t), self.velocity * s, self.velocity * s1
+    def translation(self, t: float):
+        s, s1, _ = self.ramp.value(t)
+        return self.velocity * self.ramp.integral(t), self.velocity * s, self.velocity * s1
 
 
 @dataclass(frozen=True)
@@ -152,13 +153,14 @@ class SineTranslation:
     amplitude: float
     omega: float
     phase: float
+    ramp: Ramp = Ramp()
 
-    def translation(self, t: float, ramp: Ramp):
+    def translation(self, t: float):
         arg = self.omega * t + self.phase
         q = self.amplitude * math.sin(arg)
         q1 = self.amplitude * self.omega * math.cos(arg)
         q2 = -self.amplitude * self.omega ** 2 * math.sin(arg)
-        q, q1, q2 = _ramped(ramp, t, q, q1, q2)
+        q, q1, q2 = _ramped(self.ramp, t, q, q1, q2)
         return q * self.axis, q1 * self.axis, q2 * self.axis
 
 
@@ -167,26 +169,28 @@ class TranslationSeries:
     """D(t) from samples (``spline`` of dim columns, m)."""
 
     spline: Spline
+    ramp: Ramp = Ramp()
 
-    def translation(self, t: float, ramp: Ramp):
+    def translation(self, t: float):
         q, q1, q2 = self.spline(t)
-        return _ramped(ramp, t, q, q1, q2)
+        return _ramped(self.ramp, t, q, q1, q2)
 
 
 @dataclass(frozen=True)
 class SineRotation:
-    """theta = amplitude sin(omega t + phase) (rad) about ``axis`` (3D; 2D: None)."""
+    """theta = amplitude sin(omega t + phase) (rad)."""
 
     amplitude: float
     omega: float
     phase: float
+    ramp: Ramp = Ramp()
 
-    def angle(self, t: float, ramp: Ramp):
+    def angle(self, t: float):
         arg = self.omega * t + self.phase
         q = self.amplitude * math.sin(arg)
         q1 = self.amplitude * self.omega * math.cos(arg)
         q2 = -self.amplitude * self.omega ** 2 * math.sin(arg)
-        return _ramped(ramp, t, q, q1, q2)
+        return _ramped(self.ramp, t, q, q1, q2)
 
 
 @dataclass(frozen=True)
@@ -194,10 +198,11 @@ class RotationSeries:
     """theta(t) from samples (``spline`` of one column, rad)."""
 
     spline: Spline
+    ramp: Ramp = Ramp()
 
-    def angle(self, t: float, ramp: Ramp):
+    def angle(self, t: float):
         q, q1, q2 = self.spline(t)
-        return _ramped(ramp, t, float(q[0]), float(q1[0]), float(q2[0]))
+        return _ramped(self.ramp, t, float(q[0]), float(q1[0]), float(q2[0]))
 
 
 # -- the pose --------------------------------------------------------------------------------------
@@ -269,14 +274,13 @@ def rotation_matrix(dim: int, axis: np.ndarray | None, theta: float) -> np.ndarr
 @dataclass(frozen=True)
 class Motion:
     """The prescribed motion of one wall group: translation parts, at most one rotation
-    (about ``centre`` and ``axis``: 3D; 2D about z), one ramp."""
+    (about ``centre`` and ``axis``: 3D; 2D about z); each part has its own ramp."""
 
     dim: int
     translations: tuple = ()
     rotation: object = None
     centre: np.ndarray | None = None
     axis: np.ndarray | None = None
-    ramp: Ramp = Ramp()
     #: the last time the motion is defined for (a series' last sample; inf otherwise)
     t_last: float = math.inf
 
@@ -284,10 +288,41 @@ class Motion:
         dim = self.dim
         D, D1, D2 = np.zeros(dim), np.zeros(dim), np.zeros(dim)
         for part in self.translations:
-            q, q1, q2 = part.translation(t, self.ramp)
+            q, q1, q2 = part.translation(t)
             D, D1, D2 = D + q, D1 + q1, D2 + q2
         if self.rotation is None:
             return Pose(np.eye(dim), np.zeros(dim), D, D1, D2, np.zeros(3), np.zeros(3))
-        theta, w, a = self.rotation.angle(t, self.ramp)
+        theta, w, a = self.rotation.angle(t)
         axis = np.array([0.0, 0.0, 1.0]) if dim == 2 else np.asarray(self.axis, float)
         return Pose(rotation_matrix(dim, axis, theta), np.asarray(self.centre, float), D, D1, D2, w * axis, a * axis)
+
+
+@dataclass(frozen=True)
+class MovingGroup:
+    """Walls that move together: the case's planes (``planes``: the tank's) and the finite
+    faces ``faces`` (indices into the case's faces), with their ``motion``; ``name`` is
+    where case.toml gives the motion (``domain.motion`` or ``domain.walls[k].motion``)."""
+
+    name: str
+    motion: Motion
+    planes: bool
+    faces: np.ndarray
+
+
+def moved_planes(planes, pose: Pose):
+    """The planes (:class:`sphcore.geometry.planes.Planes`) of a moving tank at ``pose``."""
+    return type(planes)(np.ascontiguousarray(pose.direction_to_world(planes.normals)),
+                        np.ascontiguousarray(pose.to_world(planes.points)))
+
+
+def wall_speed(groups, t: float, pos: np.ndarray) -> float:
+    """An upper bound of the speed (m/s) of every moving wall where the particles ``pos``
+    are: |D'| + |Omega| max |x - c - D| over the groups (the time step's limit counts the
+    walls' speed as it counts the particles')."""
+    fastest = 0.0
+    for g in groups:
+        pose = g.motion.pose(t)
+        w = float(np.linalg.norm(pose.omega))
+        reach = float(np.sqrt(((pos - pose.centre - pose.shift) ** 2).sum(axis=1).max())) if w and len(pos) else 0.0
+        fastest = max(fastest, float(np.linalg.norm(pose.velocity)) + w * reach)
+    return fastest

@@ -10,7 +10,8 @@ Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
                       constant of the run (h, support, kernel_id, rho0, c0, gamma, tait_b,
                       gravity, up, ...), frozen; also an argument to numba kernels.
 ``ctx.planes``        :class:`sphcore.geometry.planes.Planes`, the wall planes of the case
-                      (also ``ctx.walls``, the name earlier versions used).
+                      where they are at ``ctx.t`` (a moving tank's move; ``planes_at(t)``
+                      at any other time; also ``ctx.walls``, the name earlier versions used).
 ``ctx.case``          :class:`sphcore.case.model.Case`, the validated case: ``ctx.case.config[table]``
                       holds a plugin's options with defaults filled in.
 ``ctx.t``             simulated time (s) at the start of the next step.
@@ -45,6 +46,8 @@ from pathlib import Path
 
 import numpy as np
 
+from sphcore.geometry.motion import moved_planes
+
 
 class RunContext:
     """See the module docstring for every attribute. ``run`` is the run state
@@ -60,7 +63,9 @@ class RunContext:
         self.case = case
         self.params = params
         self.run = run
-        self.planes = case.planes
+        # the group that moves the planes (the tank), if any; its planes at one time, cached
+        self._tank = next((g for g in getattr(case, "moving", ()) if g.planes), None)
+        self._planes_at = (None, case.planes)
         self.output_dir = output_dir
         self.restarting = restarting
         self._pressure = pressure
@@ -77,6 +82,18 @@ class RunContext:
         """The particles as host numpy arrays, read-only: what a writer puts in its files
         (:meth:`sphcore.run.state.RunState.host`)."""
         return self.run.host()
+
+    @property
+    def planes(self):
+        return self.planes_at(self.t)
+
+    def planes_at(self, t: float):
+        """The case's wall planes at time t (s): those of case.toml unless the tank moves."""
+        if self._tank is None:
+            return self.case.planes
+        if self._planes_at[0] != t:
+            self._planes_at = (t, moved_planes(self.case.planes, self._tank.motion.pose(t)))
+        return self._planes_at[1]
 
     @property
     def walls(self):

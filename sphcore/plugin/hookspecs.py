@@ -139,6 +139,19 @@ def sph_wall_completion(dim):
 
 
 @hookspec
+def sph_moving_walls():
+    """Return True when this plugin honours walls that move (``case.moving``).
+
+    A case whose walls move (``[[domain.motion]]``, ``[[domain.walls.motion]]``) runs only
+    with plugins that say so, unless a plugin acts on the output alone (it implements no
+    hook but sph_options, sph_configure, sph_output, sph_summary and sph_finish): a plugin
+    written for fixed walls would otherwise act on walls that are no longer where it thinks.
+    A plugin that returns True reads each moving group's pose at any time from
+    ``case.moving[k].motion.pose(t)`` (:mod:`sphcore.geometry.motion`).
+    """
+
+
+@hookspec
 def sph_accelerations(ctx, acc):
     """Add accelerations to ``acc`` (shape (n, dim), m/s^2) in place.
 

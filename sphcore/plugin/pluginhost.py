@@ -197,6 +197,26 @@ def configure(pm, case) -> None:
             plugin = info(impl.plugin_name)
             label = plugin.label if plugin else f"plugin {impl.plugin_name!r}"
             raise PluginLoadError(f"{label} failed in sph_configure: {_one_line(e)}") from e
+    check_moving_walls(pm, case)
+
+
+#: hooks of a plugin that acts on the output alone: it runs with moving walls unasked
+OUTPUT_ONLY = frozenset({"sph_options", "sph_configure", "sph_output", "sph_summary", "sph_finish"})
+
+
+def check_moving_walls(pm, case) -> None:
+    """Refuse a case with moving walls when a selected plugin that acts on the run does not
+    say it honours them (``sph_moving_walls``), naming the plugin and the motion's key."""
+    if not getattr(case, "moving", ()):
+        return
+    honours = {impl.plugin_name for impl in pm.hook.sph_moving_walls.get_hookimpls()
+               if impl.function(*[{}[a] for a in impl.argnames])}
+    for name, plugin in pm.list_name_plugin():
+        hooks = {h.name for h in pm.get_hookcallers(plugin) or []}
+        if hooks - OUTPUT_ONLY - {"sph_moving_walls"} and name not in honours:
+            raise CaseError(getattr(case, "file", "case.toml"), case.moving[0].name,
+                            f"plugin {name!r} does not support moving walls; remove the motion or the plugin "
+                            "(plugins.use)")
 
 
 def summaries(pm, ctx) -> dict[str, dict]:

@@ -18,6 +18,7 @@ from sphcore.errors import CaseError, Instability
 from sphcore.physics import checks
 from sphcore.physics.forces import Forces, PressureField
 from sphcore.physics.integrators import SCHEMES
+from sphcore.geometry.motion import wall_speed
 from sphcore.physics.timestep import adaptive_dt, max_norms
 from sphcore.plugin.context import RunContext
 from sphcore.plugin.pluginhost import HookRelay
@@ -57,10 +58,13 @@ class Simulation:
         # a plugin that adds them says whether they are conservative through sph_energy
         working = sorted({i.plugin_name for i in pm.hook.sph_accelerations.get_hookimpls()}
                          - {i.plugin_name for i in pm.hook.sph_energy.get_hookimpls()})
-        self.check_energy = case.config["checks"]["energy_growth"] > 0 and not working
+        moving = [g.name for g in case.moving]  # moving walls do work on the fluid
+        self.check_energy = case.config["checks"]["energy_growth"] > 0 and not working and not moving
         ctx.stats(CORE)["energy_check"] = (
-            "on" if self.check_energy else "off: checks.energy_growth = 0" if not working else
-            f"off: plugin(s) {', '.join(working)} add accelerations and report no energy (sph_energy)")
+            "on" if self.check_energy else "off: checks.energy_growth = 0"
+            if case.config["checks"]["energy_growth"] <= 0 else
+            f"off: plugin(s) {', '.join(working)} add accelerations and report no energy (sph_energy)" if working
+            else f"off: walls move ({', '.join(moving)}) and do work on the fluid")
         self._energy_reference()
         # what a step does before it moves the particles, on step counts (sphcore.run.activities)
         cfg = case.config
@@ -147,6 +151,8 @@ class Simulation:
             dt = tcfg["dt"]
         else:
             vmax, amax = max_norms(self.state.vel, self.integrator.acc)
+            if self.case.moving:  # a wall's speed limits the step as a particle's does
+                vmax = max(vmax, wall_speed(self.case.moving, self.t, self.state.pos))
             dt = adaptive_dt(prm.h, prm.c0, prm.nu, vmax, amax, tcfg["cfl"], tcfg["force_factor"],
                              tcfg["viscous_factor"])
             if tcfg["dt_max"] is not None:
