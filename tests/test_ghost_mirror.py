@@ -13,10 +13,17 @@ from hypothesis import strategies as st
 
 from sphcore.geometry.planes import Planes
 from sphcore.physics.eos import fill_pressure as tait_pressure
-from sphcore.physics.particles import FLUID, SPHERE
+from sphcore.physics.eos import tait_b
+from sphcore.physics.particles import FLUID, SPHERE, Fields
 from sphcore_plugins.ghost.mirror import (
     TAIT_BASE_MIN,
+    FluidConstants,
+    GhostPressure,
+    Images,
     MirrorImages,
+    MirrorRule,
+    Passes,
+    PlaneGroup,
     count_images,
     count_images_serial,
     exclusive_scan,
@@ -45,7 +52,8 @@ def generate(planes_or_pair, pos, vel=None, p=None, rho=None, kind=None, wall="f
     rho = np.full(n, RHO0) if rho is None else np.asarray(rho, float)
     kind = np.full(n, FLUID, np.int8) if kind is None else kind
     m = MirrorImages(normals, offsets, free_slip=wall == "free_slip", hydrostatic=hydrostatic)
-    src = m.generate(pos, vel, rho, p, np.arange(1.0, n + 1), kind, SUPPORT, gravity, RHO0, C0, GAMMA)
+    src = m.generate(Fields(pos, vel, rho, p, np.arange(1.0, n + 1)), kind,
+                     FluidConstants(SUPPORT, gravity, RHO0, C0, GAMMA))
     return m, src
 
 
@@ -145,8 +153,8 @@ def test_images_match_reference_and_none_is_inside(case):
     support = 0.15  # a large support relative to the box, so corners and slanted planes interact
     m = MirrorImages(planes.normals, planes.offsets)
     n = len(pts)
-    src = m.generate(pts, np.zeros_like(pts), np.full(n, RHO0), np.zeros(n), np.ones(n),
-                     np.zeros(n, np.int8), support, G, RHO0, C0, GAMMA)
+    src = m.generate(Fields(pts, np.zeros_like(pts), np.full(n, RHO0), np.zeros(n), np.ones(n)),
+                     np.zeros(n, np.int8), FluidConstants(support, G, RHO0, C0, GAMMA))
     ref = reference_images(planes.normals, planes.offsets, pts, support, pts.shape[1], 1e-9 * support)
     assert src.n == len(ref)
     assert np.bincount(m.source_index, minlength=n).tolist() == np.bincount(
@@ -180,8 +188,8 @@ def test_non_perpendicular_double_images_that_fall_inside_are_dropped():
     inside = (planes.distances(np.array(ref_all)) >= 0).all(axis=1)
     assert inside.tolist() == [False, False, True]  # the setting does exercise the rule
     m = MirrorImages(planes.normals, planes.offsets)
-    src = m.generate(x, np.zeros_like(x), np.full(1, RHO0), np.zeros(1), np.ones(1), np.zeros(1, np.int8),
-                     support, G, RHO0, C0, GAMMA)
+    src = m.generate(Fields(x, np.zeros_like(x), np.full(1, RHO0), np.zeros(1), np.ones(1)), np.zeros(1, np.int8),
+                     FluidConstants(support, G, RHO0, C0, GAMMA))
     assert src.n == 2
     np.testing.assert_allclose(sorted_rows([0, 0], src.pos), sorted_rows([0, 0], ref_all[:2]), atol=1e-15)
 
@@ -230,8 +238,8 @@ def test_modified_pressure_ghost_carries_only_the_non_hydrostatic_part():
     floor = Planes.box([0.0, 0.0], [1.0, 1.0])
     x, P, rho = np.array([[0.5, 0.004]]), np.array([20.0]), np.array([1000.5])
     m = MirrorImages(floor.normals, floor.offsets, hydrostatic=True)
-    src = m.generate(x, np.zeros_like(x), rho, P, np.ones(1), np.zeros(1, np.int8), SUPPORT, G, RHO0, C0, GAMMA,
-                     rho_ref=RHO0)
+    src = m.generate(Fields(x, np.zeros_like(x), rho, P, np.ones(1)), np.zeros(1, np.int8),
+                     FluidConstants(SUPPORT, G, RHO0, C0, GAMMA, rho_ref=RHO0))
     assert src.p[0] == pytest.approx(20.0 + 0.5 * 9.81 * 0.008, rel=1e-12)
     assert src.rho[0] == pytest.approx(inverse_tait(src.p, RHO0, C0, GAMMA)[0], rel=1e-12)
 
@@ -255,11 +263,12 @@ def test_buffers_grow_and_are_reused():
     m = MirrorImages(box.normals, box.offsets)
     small = np.array([[0.5, 0.004]])
     big = np.column_stack([np.linspace(0.1, 0.9, 300), np.full(300, 0.004)])
-    args = (SUPPORT, G, RHO0, C0, GAMMA)
+    constants = FluidConstants(SUPPORT, G, RHO0, C0, GAMMA)
 
     def run(x):
         n = len(x)
-        return m.generate(x, np.zeros_like(x), np.full(n, RHO0), np.zeros(n), np.ones(n), np.zeros(n, np.int8), *args)
+        fluid = Fields(x, np.zeros_like(x), np.full(n, RHO0), np.zeros(n), np.ones(n))
+        return m.generate(fluid, np.zeros(n, np.int8), constants)
 
     assert run(small).n == 1
     cap = m.capacity
@@ -276,16 +285,19 @@ def test_serial_and_parallel_kernels_agree():
     rng = np.random.default_rng(1)
     pos = rng.random((3000, 3))
     n = len(pos)
-    vel, rho, p, m, kind = rng.normal(size=(n, 3)), np.full(n, RHO0), rng.random(n), np.ones(n), np.zeros(n, np.int8)
+    fluid = Fields(pos, rng.normal(size=(n, 3)), np.full(n, RHO0), rng.random(n), np.ones(n))
+    kind = np.zeros(n, np.int8)
+    walls = PlaneGroup(box.normals, box.offsets)
+    rule = MirrorRule(0.1, 1e-10, 3, True)
+    ghost = GhostPressure(True, G, 0.0, RHO0, tait_b(C0, RHO0, GAMMA), 1.0 / GAMMA, 0.0)
     outs = []
     for count, fill in ((count_images, fill_images), (count_images_serial, fill_images_serial)):
-        near, counts, start = np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n + 1, np.int64)
-        count(pos, vel, kind, box.normals, box.offsets, 0.1, 3, True, 1e-10, near, counts)
-        total = exclusive_scan(counts, start)
-        bufs = [np.zeros((total, 3)), np.zeros((total, 3)), np.zeros(total), np.zeros(total), np.zeros(total),
-                np.zeros(total, np.int64)]
-        fill(pos, vel, rho, p, m, near, box.normals, box.offsets, 3, True, 1e-10, True, G, RHO0, C0, GAMMA, 0.0, 0.0,
-             start, *bufs)
+        passes = Passes(np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n + 1, np.int64))
+        count(fluid, kind, walls, rule, passes)
+        total = exclusive_scan(passes.counts, passes.start)
+        bufs = Images(np.zeros((total, 3)), np.zeros((total, 3)), np.zeros(total), np.zeros(total), np.zeros(total),
+                      np.zeros(total, np.int64))
+        fill(fluid, walls, rule, ghost, passes, bufs)
         outs.append(bufs)
     assert outs[0][0].shape[0] > 1000
     for a, b in zip(*outs):

@@ -29,11 +29,11 @@ Run summary: ``ghosts_last`` (ghosts of the last force evaluation), ``ghosts_max
 
 from __future__ import annotations
 
-from sphcore.api import CaseError, Option, hookimpl
+from sphcore.api import CaseError, Fields, Option, hookimpl
 
-from .mirror import MAX_PLANES, TAIT_BASE_MIN, MirrorImages, inverse_tait
+from .mirror import MAX_PLANES, TAIT_BASE_MIN, FluidConstants, MirrorImages, inverse_tait
 
-__all__ = ["GhostPlugin", "MirrorImages", "inverse_tait", "TAIT_BASE_MIN"]
+__all__ = ["GhostPlugin", "MirrorImages", "FluidConstants", "inverse_tait", "TAIT_BASE_MIN"]
 
 TABLE = "ghost"
 
@@ -86,9 +86,8 @@ class GhostPlugin:
         # Read the state now: the core reorders particles by cell every few steps.
         st = ctx.state
         # the pressure the momentum equation uses: with modified pressure, its dynamic part
-        prm = ctx.params
-        src = self.mirror.generate(st.pos, st.vel, st.rho, ctx.force_pressure, st.m, st.kind, prm.support,
-                                   prm.gravity, prm.rho0, prm.c0, prm.gamma, prm.p_background, rho_ref=prm.rho_ref)
+        fluid = Fields(st.pos, st.vel, st.rho, ctx.force_pressure, st.m)
+        src = self.mirror.generate(fluid, st.kind, ctx.params)
         stats = ctx.stats(self)  # in the summary and the checkpoint: cumulative across restarts
         stats["ghosts_max"] = max(stats.get("ghosts_max", 0), src.n)
         stats["ghosts_last"] = src.n

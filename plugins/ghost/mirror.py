@@ -37,9 +37,17 @@ Generation is two numba passes over the particles (count, then fill at exclusive
 prefix-sum offsets), so no Python list is built; both run over all threads from
 ``PARALLEL_MIN`` particles on. :class:`MirrorImages` keeps the output buffers and grows
 them geometrically.
+
+The kernels take their arguments as records (named tuples, passed to numba as structs):
+the fluid as :class:`sphcore.api.Fields`, the wall planes as a :class:`PlaneGroup`, the
+image rule as a :class:`MirrorRule`, the ghost state's constants as a
+:class:`GhostPressure`, the per-particle bookkeeping of the passes as :class:`Passes` and
+the output buffers as :class:`Images`.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -64,6 +72,103 @@ PARALLEL_MIN = 250_000
 TOL_REL = 1e-9
 
 
+class PlaneGroup(NamedTuple):
+    """One group of wall planes n . X = offset, each normal pointing into the domain.
+
+    ``normals`` (k, dim) float64: unit normals; ``offsets`` (k,) float64: n . X0 (m) for a
+    point X0 of each plane. A group is the unit a wall pose (rotation, centre, velocity)
+    would attach to; the planes here are fixed.
+    """
+
+    normals: np.ndarray
+    offsets: np.ndarray
+
+
+class MirrorRule(NamedTuple):
+    """Which images are made, and how their velocity follows.
+
+    ``support`` (m): the kernel support 2h; a plane closer than this to a fluid particle
+    mirrors it. ``tol`` (m): a particle closer than this to a plane makes no image across
+    it (an image on top of itself), and an image must lie farther than this behind some
+    plane to be kept. ``max_order``: the most planes one image is mirrored across.
+    ``free_slip``: True mirrors the velocity with the position (normal component
+    reversed), False reverses it whole (no slip).
+    """
+
+    support: float
+    tol: float
+    max_order: int
+    free_slip: bool
+
+
+class GhostPressure(NamedTuple):
+    """Constants of the images' pressure and density (module docstring).
+
+    ``hydrostatic``: add the hydrostatic correction (rho_i - rho_ref) g . (x_g - x_i) to
+    the ghost pressure and take the density from it by the inverse Tait equation; else
+    copy p_i and rho_i. ``gravity`` (3,) float64 (m/s^2), zero-padded in 2D. ``rho_ref``
+    (kg/m^3): rho0 when the pressure is the modified (dynamic) one, else 0. ``rho0``
+    (kg/m^3), ``b`` (Pa) = c0^2 rho0 / gamma, ``inv_gamma`` = 1 / gamma, ``p_background``
+    (Pa): the fluid's Tait constants (b = 0: no correction, as without SPH).
+    """
+
+    hydrostatic: bool
+    gravity: np.ndarray
+    rho_ref: float
+    rho0: float
+    b: float
+    inv_gamma: float
+    p_background: float
+
+
+class Passes(NamedTuple):
+    """Per-particle bookkeeping of the two passes, for n particles (int64 arrays).
+
+    ``near`` (n,): bit k set when plane k lies within the support of fluid particle i;
+    ``counts`` (n,): its kept images; ``start`` (n + 1,): the exclusive prefix sum of
+    counts, the first output row of each particle's images.
+    """
+
+    near: np.ndarray
+    counts: np.ndarray
+    start: np.ndarray
+
+
+class Images(NamedTuple):
+    """Output buffers of the ghosts, one row per image (rows beyond the total unused).
+
+    ``pos`` (cap, dim) m, ``vel`` (cap, dim) m/s, ``rho`` (cap,) kg/m^3, ``p`` (cap,) Pa,
+    ``m`` (cap,) kg: the ghost's fields as :class:`sphcore.api.Fields`; ``src`` (cap,)
+    int64: index of the fluid particle it mirrors.
+    """
+
+    pos: np.ndarray
+    vel: np.ndarray
+    rho: np.ndarray
+    p: np.ndarray
+    m: np.ndarray
+    src: np.ndarray
+
+
+class FluidConstants(NamedTuple):
+    """The run's constants :meth:`MirrorImages.generate` reads (the same names as in
+    :class:`sphcore.api.Params`, which may be passed instead).
+
+    ``support`` (m): kernel support 2h; ``gravity`` (3,) or (dim,) m/s^2; ``rho0``
+    (kg/m^3), ``c0`` (m/s), ``gamma``, ``p_background`` (Pa): the Tait constants;
+    ``rho_ref`` (kg/m^3): rho0 when the pressure is the modified one, else 0.
+    """
+
+    support: float
+    gravity: np.ndarray
+    rho0: float
+    c0: float
+    gamma: float
+    p_background: float = 0.0
+    rho_ref: float = 0.0
+
+
+
 @njit(cache=True, inline="always")
 def _popcount(mask):
     c = 0
@@ -74,12 +179,15 @@ def _popcount(mask):
 
 
 @njit(cache=True, inline="always")
-def _image(pos, vel, i, normals, offsets, sub, free_slip, tol):
+def _image(fluid, i, walls, sub, rule):
     """Image of particle i across the planes in ``sub`` (index order).
 
     Returns (keep, x0, x1, x2, v0, v1, v2); keep is True when the image lies outside the
-    domain (behind at least one plane by more than tol).
+    domain (behind at least one plane by more than rule.tol).
     """
+    pos, vel = fluid.pos, fluid.vel
+    normals, offsets = walls.normals, walls.offsets
+    free_slip, tol = rule.free_slip, rule.tol
     dim = pos.shape[1]
     x0, x1 = pos[i, 0], pos[i, 1]
     v0, v1 = vel[i, 0], vel[i, 1]
@@ -111,13 +219,15 @@ def _image(pos, vel, i, normals, offsets, sub, free_slip, tol):
 
 
 @njit(cache=True, inline="always")
-def _near_chunk(pos, kind, normals, offsets, support, tol, near, lo, hi):
-    """near[i] for lo <= i < hi: bit k set when tol < d_k < support (0 for non-fluid).
+def _near_chunk(pos, kind, walls, rule, near, lo, hi):
+    """near[i] for lo <= i < hi: bit k set when rule.tol < d_k < rule.support (0 for non-fluid).
 
     Plane by plane over a chunk of particles: the inner loop has no data-dependent
     control flow, so it runs twice as fast as a particle-by-particle loop (measured), and
     this pass is all the work the bulk of the particles, far from every wall, ever costs.
     """
+    normals, offsets = walls.normals, walls.offsets
+    support, tol = rule.support, rule.tol
     dim = pos.shape[1]
     for i in range(lo, hi):
         near[i] = 0
@@ -141,13 +251,14 @@ def _near_chunk(pos, kind, normals, offsets, support, tol, near, lo, hi):
 
 
 @njit(cache=True, inline="always")
-def _count_one(pos, vel, i, near, normals, offsets, max_order, free_slip, tol):
-    """Number of kept images of a particle with near-plane mask ``near``."""
+def _count_one(fluid, i, near, walls, rule):
+    """Number of kept images of particle i with near-plane mask ``near``."""
+    max_order = rule.max_order
     c = 0
     sub = near
     while sub:  # every non-empty subset of the near planes
         if _popcount(sub) <= max_order:
-            if _image(pos, vel, i, normals, offsets, sub, free_slip, tol)[0]:
+            if _image(fluid, i, walls, sub, rule)[0]:
                 c += 1
         sub = (sub - 1) & near
     return c
@@ -159,23 +270,28 @@ CHUNK = 4096
 
 
 @njit(cache=True, parallel=True)
-def count_images(pos, vel, kind, normals, offsets, support, max_order, free_slip, tol, near, counts):
-    """Pass 1: near[i] = mask of the planes within support of fluid particle i (0 for
-    non-fluid), counts[i] = number of its kept images."""
+def count_images(fluid, kind, walls, rule, passes):
+    """Pass 1 over the particles of ``fluid`` (:class:`sphcore.api.Fields`; pos and vel are
+    read) with ``kind`` (n,) int8 codes, against ``walls`` (:class:`PlaneGroup`) under
+    ``rule`` (:class:`MirrorRule`): passes.near[i] = mask of the planes within the
+    support of fluid particle i (0 for non-fluid), passes.counts[i] = number of its kept
+    images (:class:`Passes`; start is not touched)."""
+    pos, near, counts = fluid.pos, passes.near, passes.counts
     n = pos.shape[0]
     for c in prange((n + CHUNK - 1) // CHUNK):
-        _near_chunk(pos, kind, normals, offsets, support, tol, near, c * CHUNK, min(n, (c + 1) * CHUNK))
+        _near_chunk(pos, kind, walls, rule, near, c * CHUNK, min(n, (c + 1) * CHUNK))
     for i in prange(n):
-        counts[i] = _count_one(pos, vel, i, near[i], normals, offsets, max_order, free_slip, tol) if near[i] else 0
+        counts[i] = _count_one(fluid, i, near[i], walls, rule) if near[i] else 0
 
 
 @njit(cache=True)
-def count_images_serial(pos, vel, kind, normals, offsets, support, max_order, free_slip, tol, near, counts):
+def count_images_serial(fluid, kind, walls, rule, passes):
     """:func:`count_images` on one thread (small particle counts: no thread start-up)."""
+    pos, near, counts = fluid.pos, passes.near, passes.counts
     n = pos.shape[0]
-    _near_chunk(pos, kind, normals, offsets, support, tol, near, 0, n)
+    _near_chunk(pos, kind, walls, rule, near, 0, n)
     for i in range(n):
-        counts[i] = _count_one(pos, vel, i, near[i], normals, offsets, max_order, free_slip, tol) if near[i] else 0
+        counts[i] = _count_one(fluid, i, near[i], walls, rule) if near[i] else 0
 
 
 @njit(cache=True)
@@ -188,14 +304,19 @@ def exclusive_scan(counts, start):
 
 
 @njit(cache=True, inline="always")
-def _fill_one(pos, vel, rho, p, m, i, near, normals, offsets, max_order, free_slip, tol,
-              hydrostatic, gravity, rho0, b, inv_gamma, p_background, rho_ref, j, gpos, gvel, grho, gp, gm, gsrc):
-    """Write the images of particle i from row j on, in the order of :func:`_count_one`."""
+def _fill_one(fluid, i, near, walls, rule, ghost, j, out):
+    """Write the images of particle i from row j of ``out`` on, in the order of
+    :func:`_count_one`; ``ghost``: :class:`GhostPressure`."""
+    pos, rho, p, m = fluid.pos, fluid.rho, fluid.p, fluid.m
+    gpos, gvel, grho, gp, gm, gsrc = out.pos, out.vel, out.rho, out.p, out.m, out.src
+    gravity, b = ghost.gravity, ghost.b
+    hydrostatic, rho_ref = ghost.hydrostatic, ghost.rho_ref
+    max_order = rule.max_order
     dim = pos.shape[1]
     sub = near
     while sub:
         if _popcount(sub) <= max_order:
-            keep, x0, x1, x2, v0, v1, v2 = _image(pos, vel, i, normals, offsets, sub, free_slip, tol)
+            keep, x0, x1, x2, v0, v1, v2 = _image(fluid, i, walls, sub, rule)
             if keep:
                 gpos[j, 0] = x0
                 gpos[j, 1] = x1
@@ -210,7 +331,7 @@ def _fill_one(pos, vel, rho, p, m, i, near, normals, offsets, max_order, free_sl
                     # g . (x_g - x_i) > 0 when the ghost lies lower: more pressure there
                     pg = p[i] + (rho[i] - rho_ref) * rise
                     gp[j] = pg
-                    grho[j] = eos.density(pg, rho0, b, inv_gamma, p_background)
+                    grho[j] = eos.density(pg, ghost.rho0, b, ghost.inv_gamma, ghost.p_background)
                 else:
                     gp[j] = p[i]
                     grho[j] = rho[i]
@@ -221,30 +342,24 @@ def _fill_one(pos, vel, rho, p, m, i, near, normals, offsets, max_order, free_sl
 
 
 @njit(cache=True, parallel=True)
-def fill_images(pos, vel, rho, p, m, near, normals, offsets, max_order, free_slip, tol,
-                hydrostatic, gravity, rho0, c0, gamma, p_background, rho_ref, start,
-                gpos, gvel, grho, gp, gm, gsrc):
-    """Pass 2: write the images of particle i at rows start[i]:start[i+1] (same order as pass 1).
-
-    Ghost pressure and density: see the module docstring; b = c0^2 rho0 / gamma (Pa).
-    """
-    b = eos.tait_b(c0, rho0, gamma)
-    for i in prange(pos.shape[0]):
+def fill_images(fluid, walls, rule, ghost, passes, out):
+    """Pass 2: write the images of particle i of ``fluid`` (:class:`sphcore.api.Fields`) at
+    rows passes.start[i]:passes.start[i + 1] of ``out`` (:class:`Images`), in the order of
+    pass 1 (same ``walls`` and ``rule``); their pressure and density from ``ghost``
+    (:class:`GhostPressure`, see the module docstring)."""
+    near, start = passes.near, passes.start
+    for i in prange(fluid.pos.shape[0]):
         if start[i + 1] > start[i]:
-            _fill_one(pos, vel, rho, p, m, i, near[i], normals, offsets, max_order, free_slip, tol, hydrostatic,
-                      gravity, rho0, b, 1.0 / gamma, p_background, rho_ref, start[i], gpos, gvel, grho, gp, gm, gsrc)
+            _fill_one(fluid, i, near[i], walls, rule, ghost, start[i], out)
 
 
 @njit(cache=True)
-def fill_images_serial(pos, vel, rho, p, m, near, normals, offsets, max_order, free_slip, tol,
-                       hydrostatic, gravity, rho0, c0, gamma, p_background, rho_ref, start,
-                       gpos, gvel, grho, gp, gm, gsrc):
+def fill_images_serial(fluid, walls, rule, ghost, passes, out):
     """:func:`fill_images` on one thread."""
-    b = eos.tait_b(c0, rho0, gamma)
-    for i in range(pos.shape[0]):
+    near, start = passes.near, passes.start
+    for i in range(fluid.pos.shape[0]):
         if start[i + 1] > start[i]:
-            _fill_one(pos, vel, rho, p, m, i, near[i], normals, offsets, max_order, free_slip, tol, hydrostatic,
-                      gravity, rho0, b, 1.0 / gamma, p_background, rho_ref, start[i], gpos, gvel, grho, gp, gm, gsrc)
+            _fill_one(fluid, i, near[i], walls, rule, ghost, start[i], out)
 
 
 class MirrorImages:
@@ -257,60 +372,57 @@ class MirrorImages:
     """
 
     def __init__(self, normals, offsets, free_slip=True, hydrostatic=True, max_order=None):
-        self.normals = np.ascontiguousarray(normals, dtype=np.float64)
-        self.offsets = np.ascontiguousarray(offsets, dtype=np.float64)
-        if self.normals.shape[0] > MAX_PLANES:
-            raise ValueError(f"at most {MAX_PLANES} wall planes, got {self.normals.shape[0]}")
-        self.dim = self.normals.shape[1]
+        self.walls = PlaneGroup(np.ascontiguousarray(normals, dtype=np.float64),
+                                np.ascontiguousarray(offsets, dtype=np.float64))
+        if self.walls.normals.shape[0] > MAX_PLANES:
+            raise ValueError(f"at most {MAX_PLANES} wall planes, got {self.walls.normals.shape[0]}")
+        self.dim = self.walls.normals.shape[1]
         self.free_slip, self.hydrostatic = bool(free_slip), bool(hydrostatic)
         self.max_order = self.dim if max_order is None else int(max_order)
         self.n = 0  # ghosts made by the last call
         self.capacity = 0
         self.reallocations = 0
-        self._counts = np.zeros(0, np.int64)
-        self._near = np.zeros(0, np.int64)
-        self._start = np.zeros(1, np.int64)
+        self._passes = Passes(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(1, np.int64))
         self._alloc(0)
 
     def _alloc(self, cap):
         dim = self.dim
         self.capacity = cap
-        self._pos, self._vel = np.zeros((cap, dim)), np.zeros((cap, dim))
-        self._rho, self._p, self._m = np.zeros(cap), np.zeros(cap), np.zeros(cap)
-        self._src = np.zeros(cap, np.int64)
+        self._out = Images(np.zeros((cap, dim)), np.zeros((cap, dim)), np.zeros(cap), np.zeros(cap), np.zeros(cap),
+                           np.zeros(cap, np.int64))
 
-    def generate(self, pos, vel, rho, p, m, kind, support, gravity, rho0, c0, gamma, p_background=0.0,
-                 rho_ref=0.0):
-        """Ghosts of the current fluid as :class:`sphcore.physics.particles.Sources`.
+    def generate(self, fluid, kind, constants):
+        """Ghosts of the current fluid as :class:`sphcore.api.Sources`.
 
-        ``support`` is the kernel support radius 2h (m), ``gravity`` (3,) m/s^2 padded with
-        zeros, ``rho0`` (kg/m^3), ``c0`` (m/s), ``gamma``, ``p_background`` (Pa): the Tait
-        constants of the fluid. ``p`` is the pressure the momentum equation uses;
-        ``rho_ref`` is rho0 when that is the modified (dynamic) pressure, else 0. The
-        arrays returned are views of this object's buffers, valid until the next call (the
-        core copies them into its source arrays).
+        ``fluid``: :class:`sphcore.api.Fields` of the particles (pos m, vel m/s, rho
+        kg/m^3, m kg; p the pressure the momentum equation uses, Pa); ``kind`` (n,) int8
+        codes (only FLUID particles are mirrored); ``constants``: a :class:`FluidConstants`
+        or the run's :class:`sphcore.api.Params` (support, gravity, rho0, c0, gamma,
+        p_background, rho_ref). The arrays returned are views of this object's buffers,
+        valid until the next call (the core copies them into its source arrays).
         """
-        n = pos.shape[0]
-        if self._counts.shape[0] != n:
-            self._counts = np.zeros(n, np.int64)
-            self._near = np.zeros(n, np.int64)
-            self._start = np.zeros(n + 1, np.int64)
-        tol = TOL_REL * support
+        n = fluid.pos.shape[0]
+        if self._passes.counts.shape[0] != n:
+            self._passes = Passes(np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n + 1, np.int64))
+        passes = self._passes
+        support = constants.support
+        rule = MirrorRule(float(support), TOL_REL * support, self.max_order, self.free_slip)
         parallel = n >= PARALLEL_MIN
         count = count_images if parallel else count_images_serial
         fill = fill_images if parallel else fill_images_serial
-        count(pos, vel, kind, self.normals, self.offsets, support, self.max_order, self.free_slip, tol,
-              self._near, self._counts)
-        total = int(exclusive_scan(self._counts, self._start))
+        count(fluid, kind, self.walls, rule, passes)
+        total = int(exclusive_scan(passes.counts, passes.start))
         if total > self.capacity:
             # geometric growth: a wave running up a wall raises the count a little at a time
             self._alloc(max(total, int(1.5 * self.capacity) + 64))
             self.reallocations += 1
-        fill(pos, vel, rho, p, m, self._near, self.normals, self.offsets, self.max_order, self.free_slip, tol,
-             self.hydrostatic, self._gravity(gravity), float(rho0), float(c0), float(gamma), float(p_background),
-             float(rho_ref), self._start, self._pos, self._vel, self._rho, self._p, self._m, self._src)
+        rho0, c0, gamma = float(constants.rho0), float(constants.c0), float(constants.gamma)
+        ghost = GhostPressure(self.hydrostatic, self._gravity(constants.gravity), float(constants.rho_ref), rho0,
+                              float(eos.tait_b(c0, rho0, gamma)), 1.0 / gamma, float(constants.p_background))
+        fill(fluid, self.walls, rule, ghost, passes, self._out)
         self.n = total
-        return Sources(self._pos[:total], self._vel[:total], self._rho[:total], self._p[:total], self._m[:total])
+        out = self._out
+        return Sources(out.pos[:total], out.vel[:total], out.rho[:total], out.p[:total], out.m[:total])
 
     @staticmethod
     def _gravity(g):
@@ -323,7 +435,7 @@ class MirrorImages:
     @property
     def source_index(self) -> np.ndarray:
         """Index (into the arrays of the last call) of the particle each ghost mirrors."""
-        return self._src[: self.n]
+        return self._out.src[: self.n]
 
 
 def inverse_tait(p, rho0, c0, gamma, p_background=0.0):
