@@ -21,11 +21,25 @@ import numpy as np
 
 from sphcore.api import CaseError, Option, hookimpl
 
-from .collision import TOL_REL, clearance, face_arrays, min_clearance, outside, outside_mask, reflect, reflect_particles
+from .collision import (
+    TOL_REL,
+    Motion,
+    Response,
+    Tally,
+    WallGroup,
+    clearance,
+    face_arrays,
+    min_clearance,
+    outside,
+    outside_mask,
+    reflect,
+    reflect_particles,
+    reflect_step,
+)
 from .corner import scratch
 
-__all__ = ["ReflectivePlugin", "reflect", "reflect_particles", "clearance", "min_clearance",
-           "outside", "outside_mask", "TOL_REL"]
+__all__ = ["ReflectivePlugin", "reflect_step", "reflect", "reflect_particles", "clearance", "min_clearance",
+           "outside", "outside_mask", "TOL_REL", "Motion", "WallGroup", "Response", "Tally"]
 
 TABLE = "reflective"
 
@@ -34,13 +48,10 @@ class ReflectivePlugin:
     """Reflective walls on the case's planes (``case.planes``); one instance per run."""
 
     def __init__(self):
-        self.cr = 1.0
-        self.max_reflections = 1000
-        self.velocity_at_contact = True
-        self.normals = np.zeros((0, 0))
-        self.offsets = np.zeros(0)
+        self.response = Response(1.0, 1000, True)
+        # the kernel's planes and faces; the faces' grid is built at setup (it needs the radius)
+        self.group = WallGroup.of(np.zeros((0, 0)), np.zeros(0), face_arrays(None, 0, 1.0))
         self.walls = None  # finite faces (sphcore.geometry.faces.Faces) or None
-        self.faces = ()  # their kernel arrays, built at setup (the grid needs the radius)
         self.scratch = scratch()  # per-thread work arrays of corner contacts
         # per-particle kernel outputs, resized when the particle count changes
         self._guarded = np.zeros(0, np.int8)
@@ -71,30 +82,30 @@ class ReflectivePlugin:
     def sph_configure(self, case):
         """Read [reflective] and the wall planes the core built (``case.planes``)."""
         cfg = case.config[TABLE]
-        self.cr = float(cfg["cr"])
-        self.max_reflections = int(cfg["max_reflections"])
-        self.velocity_at_contact = cfg["velocity"] == "contact"
+        self.response = Response(float(cfg["cr"]), int(cfg["max_reflections"]), cfg["velocity"] == "contact")
         planes = getattr(case, "planes", None)
         faces = getattr(case, "faces", None)
         if (planes is None or planes.count == 0) and (faces is None or faces.count == 0):
             raise CaseError(getattr(case, "file", "case.toml"), "plugins.use",
                             "the reflective plugin needs walls ([domain] min/max, planes or walls)")
-        self.normals = np.ascontiguousarray(planes.normals, dtype=np.float64)
-        self.offsets = np.ascontiguousarray(planes.offsets, dtype=np.float64)
+        normals = np.ascontiguousarray(planes.normals, dtype=np.float64)
+        offsets = np.ascontiguousarray(planes.offsets, dtype=np.float64)
         self.walls = faces if faces is not None and faces.count else None
-        self.faces = face_arrays(None, self.normals.shape[1], 1.0)  # the grid comes at setup
+        self.group = WallGroup.of(normals, offsets, face_arrays(None, normals.shape[1], 1.0))  # faces at setup
 
     @hookimpl
     def sph_setup(self, ctx):
         # The guard relies on every start-of-step position being inside; check the first.
         st = ctx.state
+        g = self.group
         if self.walls is not None:  # the grid's cells are sized by the radius
-            self.faces = face_arrays(self.walls, self.normals.shape[1], st.radius.max() if st.n else 1.0)
+            faces = face_arrays(self.walls, g.normals.shape[1], st.radius.max() if st.n else 1.0)
+            self.group = g = WallGroup.of(g.normals, g.offsets, faces)
         if st.n == 0:
             return
-        bad = outside(st.pos, st.radius, (self.normals, self.offsets))
+        bad = outside(st.pos, st.radius, (g.normals, g.offsets))
         if bad.any():
-            c = clearance(st.pos, st.radius, (self.normals, self.offsets))
+            c = clearance(st.pos, st.radius, (g.normals, g.offsets))
             worst = int(np.argmin(np.where(bad, c / st.radius, np.inf)))
             raise CaseError(getattr(ctx.case, "file", "case.toml"), "blocks",
                             f"particle id {int(st.id[worst])} at {st.pos[worst].tolist()} overlaps "
@@ -123,9 +134,8 @@ class ReflectivePlugin:
         if self._guarded.shape[0] != n:
             self._guarded = np.zeros(n, np.int8)
             self._counts = np.zeros(n, np.int32)
-        guarded, hit, events = reflect(pos0, pos, vel, acc, ctx.state.radius, self.normals, self.offsets,
-                                       *self.faces, *self.scratch, self.cr, self.max_reflections,
-                                       self.velocity_at_contact, self._guarded, self._counts)
+        guarded, hit, events = reflect_step(Motion(pos0, pos, vel, acc, ctx.state.radius), self.group, self.response,
+                                            Tally(self._guarded, self._counts), self.scratch)
         # ctx.stats: in summary.json under "reflective" and in every checkpoint, so the
         # counts are cumulative across restarts
         stats = ctx.stats(self)

@@ -48,13 +48,15 @@ the round-off of n . C (about 1e-16 |C|), i.e. r >> 1e-7 |C|, true for any SPH c
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
 import numpy as np
 
 from sphcore.api import box_cells, build_grid, by_size, face_distance, particle_distance, plane_distance
 
-from .corner import MAX_ACTIVE, respond, scratch
-from .facecontact import contact_normal, earliest_face, empty_grid, near_any_face
+from .corner import MAX_ACTIVE, HalfSpaces, Scratch, respond, scratch
+from .facecontact import FaceSet, contact_normal, earliest_face, empty_grid, near_any_face
 
 #: side of the face grid's cells in particle radii. A step's box (2 r + the step) spans at
 #: most three cells per axis for steps up to 2 r; cells of 2 r list few faces each: with a
@@ -66,6 +68,79 @@ CELL_RADII = 2.0
 TOL_REL = 1e-9
 
 
+class WallGroup(NamedTuple):
+    """The walls of one group: planes and finite faces, in the frame of the particles.
+
+    ``normals`` (k, dim) float64: unit normals of the planes, pointing into the domain;
+    ``offsets`` (k,) float64: n . X0 (m) for a point X0 of each plane; then the fields of
+    :class:`.facecontact.FaceSet`, the finite faces with their grid (no faces: nf = 0):
+    ``verts`` (nf, dim, dim) float64 vertices (m), ``lo`` (3,) float64 the grid's lower
+    corner (m), ``inv_cell`` 1 / its cell side (1/m), ``shape`` (3,) int64 cells per axis,
+    ``start`` (ncells + 1,) int64 and ``items`` int32, the faces of each cell. A group is
+    the unit a pose (rotation, centre, velocity) would attach to; the walls here are
+    fixed. Flat, not a FaceSet inside: numba's parallel loops take a record of arrays and
+    scalars, not a record within one.
+    """
+
+    normals: np.ndarray
+    offsets: np.ndarray
+    verts: np.ndarray
+    lo: np.ndarray
+    inv_cell: float
+    shape: np.ndarray
+    start: np.ndarray
+    items: np.ndarray
+
+    @classmethod
+    def of(cls, normals, offsets, faces):
+        """The group of planes (``normals``, ``offsets``) and ``faces`` (a FaceSet)."""
+        return cls(normals, offsets, *faces)
+
+
+class Motion(NamedTuple):
+    """The particles' motion over one step, (n, dim) C-contiguous float64 unless noted.
+
+    ``pos0``: start positions C0 (m), only read; ``pos``: end positions C1 (m), changed in
+    place; ``vel``: end-of-step velocity (m/s), changed in place; ``acc``: the step's
+    acceleration (m/s^2), only read; ``radius`` (n,): the particles' radii (m).
+    """
+
+    pos0: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray
+    acc: np.ndarray
+    radius: np.ndarray
+
+    @property
+    def shape(self):
+        """(n, dim) of the particle arrays (``by_size`` reads the first argument's rows)."""
+        return self.pos.shape
+
+
+class Response(NamedTuple):
+    """How a collision is answered.
+
+    ``cr``: restitution coefficient (Eq. 2), 0 <= cr <= 1 (no unit); ``max_reflections``:
+    reflections per particle and step before the guard (int >= 0);
+    ``velocity_at_contact``: Eq. 2 at the contact point (True) or at the end point.
+    """
+
+    cr: float
+    max_reflections: int
+    velocity_at_contact: bool
+
+
+class Tally(NamedTuple):
+    """Per-particle outputs of a step, written for every particle.
+
+    ``guarded`` (n,) int8: 1 where the guard put the particle back at pos0, else 0;
+    ``reflections`` (n,) int32: reflections performed (0: untouched).
+    """
+
+    guarded: np.ndarray
+    reflections: np.ndarray
+
+
 @numba.njit(cache=True)
 def _limit(r):
     """The collision threshold r - tol (m): a plane collides when d < _limit(r)."""
@@ -73,31 +148,28 @@ def _limit(r):
 
 
 @by_size
-def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
-            gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
+def reflect_step(motion, walls, response, tally, work):
     """Reflect every particle that left the domain during a step; return (guard returns,
     particles reflected, reflections performed) of the step.
 
-    pos0, pos, vel, acc: (n, dim) C-contiguous float64: start and end positions (m),
-    end-of-step velocity (m/s), the step's acceleration (m/s^2). radius (n,) m.
-    normals (k, dim) unit vectors into the domain, offsets (k,) = n . X0 (m).
-    verts (nf, dim, dim): finite faces (:mod:`sphcore.geometry.faces`), with their grid
-    (glo, ginv, gshape, gstart, gitems: :meth:`sphcore.geometry.facegrid.FaceGrid.arrays`).
-    ws, wi: scratch rows for corner contacts, one per block of particles (:func:`.corner.scratch`).
-    cr: restitution coefficient (Eq. 2), 0 <= cr <= 1. max_reflections: int >= 0.
-    velocity_at_contact: bool, Eq. 2 at the contact point (True) or at the end point.
-    guarded_flags (n,) int8 out: 1 where the guard put the particle back at pos0.
-    reflection_counts (n,) int32 out: reflections performed (0: untouched).
-    ``pos`` and ``vel`` are changed in place; ``pos0`` and ``acc`` are only read.
+    ``motion``: :class:`Motion` (``pos`` and ``vel`` are changed in place); ``walls``: a
+    :class:`WallGroup`; ``response``: :class:`Response`; ``tally``: :class:`Tally`,
+    written for every particle; ``work``: :class:`.corner.Scratch` as :func:`.corner.scratch`
+    allocates it, one row per block of particles.
     """
+    pos0, pos = motion.pos0, motion.pos
+    radius = motion.radius
+    normals, offsets = walls.normals, walls.offsets
+    guarded_flags, reflection_counts = tally
     n = pos.shape[0]
     three = pos.shape[1] == 3
-    rows = ws.shape[0]
+    rows = work.floats.shape[0]
     guarded = 0
     reflected = 0
     events = 0
     # blocks of particles, each with its own scratch row for corner contacts
     for b in numba.prange(rows):
+        row = Scratch(work.floats[b], work.ints[b])
         g = 0
         r = 0
         e = 0
@@ -112,14 +184,11 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gsh
                 if particle_distance(normals, offsets, k, pos, i) < lim:
                     hit = True
                     break
-            if not hit and verts.shape[0]:
-                hit = near_any_face(verts, glo, ginv, gshape, gstart, gitems, pos0[i, 0], pos0[i, 1],
-                                    pos0[i, 2] if three else 0.0, pos[i, 0], pos[i, 1],
-                                    pos[i, 2] if three else 0.0, lim)
+            if not hit and walls.verts.shape[0]:
+                hit = near_any_face(walls, (pos0[i, 0], pos0[i, 1], pos0[i, 2] if three else 0.0),
+                                    (pos[i, 0], pos[i, 1], pos[i, 2] if three else 0.0), lim)
             if hit:
-                g += _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv,
-                                  gshape, gstart, gitems, ws[b], wi[b], cr, max_reflections,
-                                  velocity_at_contact, guarded_flags, reflection_counts)
+                g += _reflect_one(i, motion, walls, response, tally, row)
                 if reflection_counts[i] > 0:
                     r += 1
                     e += reflection_counts[i]
@@ -130,14 +199,18 @@ def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gsh
 
 
 @numba.njit(cache=True)
-def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
-                 gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
+def _reflect_one(i, motion, walls, response, tally, work):
     """The paper's loop for particle i (earliest contact first, until inside or the guard);
     returns 1 if the guard put it back at pos0, else 0. Planes and faces compete for the
     earliest contact; when a wall is met a second time in the step and the contact touches
     two or more walls, that contact is resolved as one (:mod:`.corner`) if CR < 1. With
     CR = 1 the paper's sequence is the exact (billiard) answer and ends in any corner (a
-    wedge of angle a lets a path through after about pi / a reflections): it is kept."""
+    wedge of angle a lets a path through after about pi / a reflections): it is kept.
+    ``work``: this block's row of :class:`.corner.Scratch`."""
+    pos0, pos, vel, acc, radius = motion
+    normals, offsets, verts = walls.normals, walls.offsets, walls.verts
+    cr, max_reflections, velocity_at_contact = response
+    wi = work.ints
     dim = pos.shape[1]
     nplanes = normals.shape[0]
     guarded = 0
@@ -164,15 +237,14 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
                     best = k
                     dbest = db
         b2 = pos[i, 2] if dim == 3 else 0.0
-        face, fbest = earliest_face(verts, glo, ginv, gshape, gstart, gitems, a0, a1, a2,
-                                    pos[i, 0], pos[i, 1], b2, r, lim, fbest)
+        face, fbest = earliest_face(walls, (a0, a1, a2), (pos[i, 0], pos[i, 1], b2), r, lim, fbest)
         if best < 0 and face < 0:
             break
         if count == max_reflections:
             # guard: C0 is inside (the invariant); keep the velocity reflected so far
             for j in range(dim):
                 pos[i, j] = pos0[i, j]
-            guarded_flags[i] = 1
+            tally.guarded[i] = 1
             guarded = 1
             break
         # contact point C0' (Fig. 6): inside every wall, so the invariant holds for A
@@ -200,8 +272,7 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
                 revisit = True
         wi[11 + count % 8] = wall
         count += 1
-        if revisit and cr < 1.0 and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape,
-                                            gstart, gitems, a0, a1, a2, r, cr, ws, wi):
+        if revisit and cr < 1.0 and _corner(i, motion, walls, (a0, a1, a2), r, cr, work):
             continue
         depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
         u = vel[i, 0] * n0 + vel[i, 1] * n1
@@ -224,7 +295,7 @@ def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, g
         pos[i, 1] += shift * n1
         if dim == 3:
             pos[i, 2] += shift * n2
-    reflection_counts[i] = count
+    tally.reflections[i] = count
     return guarded
 
 
@@ -235,10 +306,15 @@ def plane_distance_n(n0, n1, n2, off, x0, x1, x2):
 
 
 @numba.njit(cache=True)
-def _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart, gitems, a0, a1, a2,
-            r, cr, ws, wi):
-    """Resolve the contact at A as one with every wall touching there (:mod:`.corner`) when
-    two or more do; False (nothing changed) otherwise. ws, wi: this thread's scratch."""
+def _corner(i, motion, walls, a, r, cr, work):
+    """Resolve the contact at A = ``a`` (x, y, z) of particle i (radius r, m) as one with
+    every wall of ``walls`` touching there (:mod:`.corner`) when two or more do; False
+    (nothing changed) otherwise. ``work``: this block's row of :class:`.corner.Scratch`."""
+    pos, vel = motion.pos, motion.vel
+    normals, offsets, verts = walls.normals, walls.offsets, walls.verts
+    glo, ginv, gshape, gstart, gitems = walls.lo, walls.inv_cell, walls.shape, walls.start, walls.items
+    ws, wi = work
+    a0, a1, a2 = a
     dim = pos.shape[1]
     touch = r * (1.0 + 1e-6)
     nrm = ws[0:MAX_ACTIVE * dim].reshape((MAX_ACTIVE, dim))
@@ -275,7 +351,19 @@ def _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart, git
                             m += 1
     if m < 2:
         return False
-    return respond(nrm, c, m, pos, vel, i, cr, TOL_REL * r, ws, wi)
+    return respond(HalfSpaces(nrm, c, m), pos, vel, i, cr, TOL_REL * r, work)
+
+
+def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
+            gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
+    """:func:`reflect_step` with each array a separate argument, in the order of the
+    records' fields: Motion (pos0 .. radius), WallGroup (normals, offsets, then the
+    FaceSet's verts .. items, e.g. ``*face_arrays(...)``), Scratch (``*scratch()``),
+    Response (cr .. velocity_at_contact), Tally (guarded_flags, reflection_counts)."""
+    return reflect_step(Motion(pos0, pos, vel, acc, radius),
+                        WallGroup(normals, offsets, verts, glo, ginv, gshape, gstart, gitems),
+                        Response(cr, max_reflections, velocity_at_contact),
+                        Tally(guarded_flags, reflection_counts), Scratch(ws, wi))
 
 
 @by_size
@@ -326,18 +414,18 @@ def _inout(name, a, shape):
 
 
 def face_arrays(faces, dim, radius):
-    """Kernel arguments (verts, glo, ginv, gshape, gstart, gitems) for ``faces`` (a
-    :class:`sphcore.geometry.faces.Faces` or None), the grid's cells CELL_RADII radii wide (m)."""
+    """The :class:`.facecontact.FaceSet` of ``faces`` (a :class:`sphcore.geometry.faces.Faces`
+    or None), the grid's cells CELL_RADII radii wide (``radius`` in m)."""
     if faces is None or faces.count == 0:
         return empty_grid(dim)
     grid = build_grid(faces.verts, CELL_RADII * float(radius))
-    return (np.ascontiguousarray(faces.verts, dtype=np.float64),) + grid.arrays()
+    return FaceSet(np.ascontiguousarray(faces.verts, dtype=np.float64), *grid.arrays())
 
 
 def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflections=1000,
                       velocity_at_contact=True, guarded_flags=None, reflection_counts=None,
                       faces=None):
-    """Python entry to :func:`reflect`: checks and converts arguments, returns the guard count.
+    """Python entry to :func:`reflect_step`: checks and converts arguments, returns the guard count.
 
     pos (m) and vel (m/s), (n, dim) writeable C-contiguous float64, are changed in place.
     pos0 (m) and acc (m/s^2, None for zero) are converted as needed; radius is a scalar
@@ -370,10 +458,10 @@ def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflectio
         raise ValueError(f"guarded_flags must be int8 of shape {(n,)}")
     if reflection_counts.dtype != np.int32 or reflection_counts.shape != (n,):
         raise ValueError(f"reflection_counts must be int32 of shape {(n,)}")
-    fa = face_arrays(faces, dim, radius.max() if n else 1.0)
-    return int(reflect(pos0, pos, vel, acc, radius, normals, offsets, *fa, *scratch(), float(cr),
-                       int(max_reflections), bool(velocity_at_contact), guarded_flags,
-                       reflection_counts)[0])
+    walls = WallGroup.of(normals, offsets, face_arrays(faces, dim, radius.max() if n else 1.0))
+    response = Response(float(cr), int(max_reflections), bool(velocity_at_contact))
+    return int(reflect_step(Motion(pos0, pos, vel, acc, radius), walls, response,
+                            Tally(guarded_flags, reflection_counts), scratch())[0])
 
 
 def clearance(pos, radius, planes):

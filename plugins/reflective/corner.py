@@ -27,6 +27,8 @@ feasible candidate whose multipliers are non-negative is the projection (KKT).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -55,11 +57,32 @@ NINT = 24
 ROWS = 64
 
 
+class Scratch(NamedTuple):
+    """Work arrays of corner contacts (no units: the functions here lay out their words).
+
+    As :func:`scratch` allocates them: ``floats`` (ROWS, NFLOAT) float64 and ``ints``
+    (ROWS, NINT) int64, one row per block of particles; as one contact uses them: one row
+    of each, ``floats`` (NFLOAT,) and ``ints`` (NINT,).
+    """
+
+    floats: np.ndarray
+    ints: np.ndarray
+
+
+class HalfSpaces(NamedTuple):
+    """The walls touching at one contact, as half-spaces normals[k] . X >= bounds[k] for
+    k < ``active``: ``normals`` (MAX_ACTIVE, dim) float64 unit vectors into the domain,
+    ``bounds`` (MAX_ACTIVE,) float64 (m), rows from ``active`` on unused."""
+
+    normals: np.ndarray
+    bounds: np.ndarray
+    active: int
+
+
 def scratch():
-    """(floats, ints) of shapes (ROWS, NFLOAT), (ROWS, NINT): the work arrays of corner
-    contacts, one row per block of particles, allocated once by the caller so that the
-    kernel allocates nothing."""
-    return np.zeros((ROWS, NFLOAT)), np.zeros((ROWS, NINT), np.int64)
+    """The :class:`Scratch` of the reflective kernel, (ROWS, NFLOAT) and (ROWS, NINT) rows,
+    allocated once by the caller so that the kernel allocates nothing."""
+    return Scratch(np.zeros((ROWS, NFLOAT)), np.zeros((ROWS, NINT), np.int64))
 
 
 @njit(cache=True)
@@ -158,10 +181,14 @@ def _solve(g, rhs, size, a, b, lam):
 
 
 @njit(cache=True)
-def respond(nrm, c, m, pos, vel, i, cr, tol, ws, wi):
-    """The joint response for particle i (pos, vel in place) to the m walls nrm . X >= c;
-    False when the half-spaces have no common point (then nothing is changed).
-    ws, wi: scratch (``ws[32:]`` and ``wi[0:3]`` are used)."""
+def respond(walls, pos, vel, i, cr, tol, work):
+    """The joint response for particle i of ``pos`` (m) and ``vel`` (m/s), (n, dim), changed
+    in place, to the walls ``walls`` (:class:`HalfSpaces`) with restitution coefficient
+    ``cr`` and feasibility tolerance ``tol`` (m); False when the half-spaces have no common
+    point (then nothing is changed). ``work``: one row of :class:`Scratch`
+    (``floats[32:]`` and ``ints[0:3]`` are used)."""
+    nrm, c, m = walls
+    ws, wi = work
     dim = pos.shape[1]
     b = ws[32:32 + dim]
     p = ws[35:35 + dim]

@@ -10,11 +10,16 @@ response then uses the plane tangent to the face's r-neighbourhood at the contac
 normal n = (C - q) / |C - q|, q the face's point nearest to the contact C. That set is
 convex, so the tangent plane separates it from everything on its fluid side: a centre
 mirrored to at least r from the plane (Eq. 1) is clear of the face.
+
+The kernels take the faces and their grid as one record with the fields of
+:class:`FaceSet` (a FaceSet, or the :class:`.collision.WallGroup` that holds them), and the
+ends of a path as (x, y, z) tuples (m; z = 0 in 2D).
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -22,12 +27,35 @@ from numba import njit
 from sphcore.api import box_cells, face_distance, first_contact, nearest_point
 
 
+class FaceSet(NamedTuple):
+    """Finite wall faces with the grid that lists them by cell (an empty set: no faces).
+
+    ``verts`` (nf, dim, dim) float64: the faces' vertices (m), segments in 2D, triangles
+    in 3D, oriented as in :mod:`sphcore.geometry.faces`. The grid
+    (:class:`sphcore.api.FaceGrid`, its ``arrays()``): ``lo`` (3,) float64 lower corner
+    (m), ``inv_cell`` 1 / cell side (1/m), ``shape`` (3,) int64 cells per axis (1 for an
+    absent z), ``start`` (ncells + 1,) int64 and ``items`` (int32): the faces of cell c
+    are items[start[c]:start[c + 1]].
+    """
+
+    verts: np.ndarray
+    lo: np.ndarray
+    inv_cell: float
+    shape: np.ndarray
+    start: np.ndarray
+    items: np.ndarray
+
+
 @njit(cache=True)
-def near_any_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, b2, lim):
-    """Whether some face may come closer than ``lim`` (m) to the path A -> B (a cheap
-    test: the distance at B minus the path's length)."""
+def near_any_face(faces, a, b, lim):
+    """Whether some face of ``faces`` (the fields of :class:`FaceSet`) may come closer than
+    ``lim`` (m) to the path A -> B (a cheap test: the distance at B minus the path's length)."""
+    verts, lo, inv_cell = faces.verts, faces.lo, faces.inv_cell
+    shape, start, items = faces.shape, faces.start, faces.items
     if verts.shape[0] == 0:
         return False
+    a0, a1, a2 = a
+    b0, b1, b2 = b
     dim = verts.shape[2]
     ln = math.sqrt((b0 - a0) ** 2 + (b1 - a1) ** 2 + (b2 - a2) ** 2)
     x0, x1, y0, y1, z0, z1 = box_cells(lo, inv_cell, shape, dim, a0, a1, a2, b0, b1, b2, lim)
@@ -42,12 +70,17 @@ def near_any_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, 
 
 
 @njit(cache=True)
-def earliest_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, b2, r, lim, fbest):
-    """(face, t): the face with the earliest contact t < ``fbest`` along A -> B for a sphere
-    of radius r (m) among those the path comes closer to than ``lim``; (-1, fbest) if none."""
+def earliest_face(faces, a, b, r, lim, fbest):
+    """(face, t): the face of ``faces`` (the fields of :class:`FaceSet`) with the earliest
+    contact t < ``fbest`` along A -> B for a sphere of radius r (m) among those the path
+    comes closer to than ``lim`` (m); (-1, fbest) if none. t is the fraction of the path."""
+    verts, lo, inv_cell = faces.verts, faces.lo, faces.inv_cell
+    shape, start, items = faces.shape, faces.start, faces.items
     best = -1
     if verts.shape[0] == 0:
         return best, fbest
+    a0, a1, a2 = a
+    b0, b1, b2 = b
     dim = verts.shape[2]
     ln = math.sqrt((b0 - a0) ** 2 + (b1 - a1) ** 2 + (b2 - a2) ** 2)
     x0, x1, y0, y1, z0, z1 = box_cells(lo, inv_cell, shape, dim, a0, a1, a2, b0, b1, b2, r)
@@ -112,6 +145,6 @@ def face_normal(verts, f):
 
 
 def empty_grid(dim):
-    """Kernel arguments for a case without faces."""
-    return (np.zeros((0, dim, dim)), np.zeros(3), 1.0, np.ones(3, np.int64),
-            np.zeros(2, np.int64), np.zeros(0, np.int32))
+    """The :class:`FaceSet` of a case without faces."""
+    return FaceSet(np.zeros((0, dim, dim)), np.zeros(3), 1.0, np.ones(3, np.int64),
+                   np.zeros(2, np.int64), np.zeros(0, np.int32))
