@@ -23,7 +23,7 @@ from sphcore.api import CaseError, Option, hookimpl
 
 from .collision import (
     TOL_REL,
-    Motion,
+    Paths,
     Response,
     Tally,
     WallGroup,
@@ -37,9 +37,10 @@ from .collision import (
     reflect_step,
 )
 from .corner import scratch
+from .moving import groups_of, reflect_moving
 
 __all__ = ["ReflectivePlugin", "reflect_step", "reflect", "reflect_particles", "clearance", "min_clearance",
-           "outside", "outside_mask", "TOL_REL", "Motion", "WallGroup", "Response", "Tally"]
+           "outside", "outside_mask", "TOL_REL", "Paths", "WallGroup", "Response", "Tally"]
 
 TABLE = "reflective"
 
@@ -92,11 +93,20 @@ class ReflectivePlugin:
         offsets = np.ascontiguousarray(planes.offsets, dtype=np.float64)
         self.walls = faces if faces is not None and faces.count else None
         self.group = WallGroup.of(normals, offsets, face_arrays(None, normals.shape[1], 1.0))  # faces at setup
+        # walls that move: the groups that move together, each in its own frame (.moving)
+        self.groups = groups_of(case, normals, offsets) if getattr(case, "moving", ()) else None
+
+    @hookimpl
+    def sph_moving_walls(self):
+        return True
 
     @hookimpl
     def sph_setup(self, ctx):
         # The guard relies on every start-of-step position being inside; check the first.
         st = ctx.state
+        if self.groups is not None:
+            self._setup_groups(ctx)
+            return
         g = self.group
         if self.walls is not None:  # the grid's cells are sized by the radius
             faces = face_arrays(self.walls, g.normals.shape[1], st.radius.max() if st.n else 1.0)
@@ -118,9 +128,35 @@ class ReflectivePlugin:
                                 f"particle id {int(st.id[worst])} at {st.pos[worst].tolist()} lies in a "
                                 "solid wall or closer than its radius to a wall face")
 
+    def _setup_groups(self, ctx):
+        """Build each group's face grid; check that every particle is inside every group
+        where the groups are at ctx.t (a restart starts with them moved)."""
+        st = ctx.state
+        for g in self.groups:
+            g.build_grid(st.radius.max() if st.n else 1.0)
+            if st.n == 0:
+                continue
+            b = g.to_body(st.pos, ctx.t)
+            if g.normals.shape[0]:
+                bad = outside(b, st.radius, (g.normals, g.offsets))
+                if bad.any():
+                    c = clearance(b, st.radius, (g.normals, g.offsets))
+                    worst = int(np.argmin(np.where(bad, c / st.radius, np.inf)))
+                    raise CaseError(getattr(ctx.case, "file", "case.toml"), "blocks",
+                                    f"particle id {int(st.id[worst])} at {st.pos[worst].tolist()} overlaps a wall "
+                                    f"of {g.name} by {-c[worst]:.3g} m at t = {ctx.t:g} s")
+            if g.faces is not None:
+                d = g.faces.distances(b) - st.radius * (1.0 - TOL_REL)
+                inside = g.faces.in_fluid(b)
+                if (d < 0).any() or not inside.all():
+                    worst = int(np.argmin(np.where(inside, d, -np.inf)))
+                    raise CaseError(getattr(ctx.case, "file", "case.toml"), "blocks",
+                                    f"particle id {int(st.id[worst])} at {st.pos[worst].tolist()} lies in a "
+                                    f"solid wall of {g.name} or closer than its radius to it at t = {ctx.t:g} s")
+
     # trylast: walls act after any other plugin has moved particles in this hook
     @hookimpl(trylast=True)
-    def sph_after_integrate(self, ctx, pos0, pos, vel, acc):
+    def sph_after_integrate(self, ctx, pos0, pos, vel, acc, dt):
         """Reflect the particles that crossed a wall this step (``pos``, ``vel`` in place).
 
         The contact form of Eq. 2 assumes the step was free motion under the constant
@@ -134,8 +170,15 @@ class ReflectivePlugin:
         if self._guarded.shape[0] != n:
             self._guarded = np.zeros(n, np.int8)
             self._counts = np.zeros(n, np.int32)
-        guarded, hit, events = reflect_step(Motion(pos0, pos, vel, acc, ctx.state.radius), self.group, self.response,
-                                            Tally(self._guarded, self._counts), self.scratch)
+        tally = Tally(self._guarded, self._counts)
+        if self.groups is None:
+            guarded, hit, events = reflect_step(Paths(pos0, pos, vel, acc, ctx.state.radius), self.group,
+                                                self.response, tally, self.scratch)
+        else:
+            guarded, hit, events, pinched = reflect_moving(self.groups, ctx.t, dt, pos0, pos, vel, acc,
+                                                           ctx.state.radius, self.response, tally, self.scratch)
+            stats = ctx.stats(self)
+            stats["pinched"] = stats.get("pinched", 0) + pinched
         # ctx.stats: in summary.json under "reflective" and in every checkpoint, so the
         # counts are cumulative across restarts
         stats = ctx.stats(self)

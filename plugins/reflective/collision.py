@@ -97,8 +97,8 @@ class WallGroup(NamedTuple):
         return cls(normals, offsets, *faces)
 
 
-class Motion(NamedTuple):
-    """The particles' motion over one step, (n, dim) C-contiguous float64 unless noted.
+class Paths(NamedTuple):
+    """The particles' paths over one step, (n, dim) C-contiguous float64 unless noted.
 
     ``pos0``: start positions C0 (m), only read; ``pos``: end positions C1 (m), changed in
     place; ``vel``: end-of-step velocity (m/s), changed in place; ``acc``: the step's
@@ -148,17 +148,17 @@ def _limit(r):
 
 
 @by_size
-def reflect_step(motion, walls, response, tally, work):
+def reflect_step(paths, walls, response, tally, work):
     """Reflect every particle that left the domain during a step; return (guard returns,
     particles reflected, reflections performed) of the step.
 
-    ``motion``: :class:`Motion` (``pos`` and ``vel`` are changed in place); ``walls``: a
+    ``paths``: :class:`Paths` (``pos`` and ``vel`` are changed in place); ``walls``: a
     :class:`WallGroup`; ``response``: :class:`Response`; ``tally``: :class:`Tally`,
     written for every particle; ``work``: :class:`.corner.Scratch` as :func:`.corner.scratch`
     allocates it, one row per block of particles.
     """
-    pos0, pos = motion.pos0, motion.pos
-    radius = motion.radius
+    pos0, pos = paths.pos0, paths.pos
+    radius = paths.radius
     normals, offsets = walls.normals, walls.offsets
     guarded_flags, reflection_counts = tally
     n = pos.shape[0]
@@ -188,7 +188,7 @@ def reflect_step(motion, walls, response, tally, work):
                 hit = near_any_face(walls, (pos0[i, 0], pos0[i, 1], pos0[i, 2] if three else 0.0),
                                     (pos[i, 0], pos[i, 1], pos[i, 2] if three else 0.0), lim)
             if hit:
-                g += _reflect_one(i, motion, walls, response, tally, row)
+                g += _reflect_one(i, paths, walls, response, tally, row)
                 if reflection_counts[i] > 0:
                     r += 1
                     e += reflection_counts[i]
@@ -199,7 +199,7 @@ def reflect_step(motion, walls, response, tally, work):
 
 
 @numba.njit(cache=True)
-def _reflect_one(i, motion, walls, response, tally, work):
+def _reflect_one(i, paths, walls, response, tally, work):
     """The paper's loop for particle i (earliest contact first, until inside or the guard);
     returns 1 if the guard put it back at pos0, else 0. Planes and faces compete for the
     earliest contact; when a wall is met a second time in the step and the contact touches
@@ -207,7 +207,7 @@ def _reflect_one(i, motion, walls, response, tally, work):
     CR = 1 the paper's sequence is the exact (billiard) answer and ends in any corner (a
     wedge of angle a lets a path through after about pi / a reflections): it is kept.
     ``work``: this block's row of :class:`.corner.Scratch`."""
-    pos0, pos, vel, acc, radius = motion
+    pos0, pos, vel, acc, radius = paths
     normals, offsets, verts = walls.normals, walls.offsets, walls.verts
     cr, max_reflections, velocity_at_contact = response
     wi = work.ints
@@ -272,7 +272,7 @@ def _reflect_one(i, motion, walls, response, tally, work):
                 revisit = True
         wi[11 + count % 8] = wall
         count += 1
-        if revisit and cr < 1.0 and _corner(i, motion, walls, (a0, a1, a2), r, cr, work):
+        if revisit and cr < 1.0 and _corner(i, paths, walls, (a0, a1, a2), r, cr, work):
             continue
         depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
         u = vel[i, 0] * n0 + vel[i, 1] * n1
@@ -306,11 +306,11 @@ def plane_distance_n(n0, n1, n2, off, x0, x1, x2):
 
 
 @numba.njit(cache=True)
-def _corner(i, motion, walls, a, r, cr, work):
+def _corner(i, paths, walls, a, r, cr, work):
     """Resolve the contact at A = ``a`` (x, y, z) of particle i (radius r, m) as one with
     every wall of ``walls`` touching there (:mod:`.corner`) when two or more do; False
     (nothing changed) otherwise. ``work``: this block's row of :class:`.corner.Scratch`."""
-    pos, vel = motion.pos, motion.vel
+    pos, vel = paths.pos, paths.vel
     normals, offsets, verts = walls.normals, walls.offsets, walls.verts
     glo, ginv, gshape, gstart, gitems = walls.lo, walls.inv_cell, walls.shape, walls.start, walls.items
     ws, wi = work
@@ -357,10 +357,10 @@ def _corner(i, motion, walls, a, r, cr, work):
 def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
             gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
     """:func:`reflect_step` with each array a separate argument, in the order of the
-    records' fields: Motion (pos0 .. radius), WallGroup (normals, offsets, then the
+    records' fields: Paths (pos0 .. radius), WallGroup (normals, offsets, then the
     FaceSet's verts .. items, e.g. ``*face_arrays(...)``), Scratch (``*scratch()``),
     Response (cr .. velocity_at_contact), Tally (guarded_flags, reflection_counts)."""
-    return reflect_step(Motion(pos0, pos, vel, acc, radius),
+    return reflect_step(Paths(pos0, pos, vel, acc, radius),
                         WallGroup(normals, offsets, verts, glo, ginv, gshape, gstart, gitems),
                         Response(cr, max_reflections, velocity_at_contact),
                         Tally(guarded_flags, reflection_counts), Scratch(ws, wi))
@@ -460,7 +460,7 @@ def reflect_particles(pos0, pos, vel, acc, radius, planes, cr=1.0, max_reflectio
         raise ValueError(f"reflection_counts must be int32 of shape {(n,)}")
     walls = WallGroup.of(normals, offsets, face_arrays(faces, dim, radius.max() if n else 1.0))
     response = Response(float(cr), int(max_reflections), bool(velocity_at_contact))
-    return int(reflect_step(Motion(pos0, pos, vel, acc, radius), walls, response,
+    return int(reflect_step(Paths(pos0, pos, vel, acc, radius), walls, response,
                             Tally(guarded_flags, reflection_counts), scratch())[0])
 
 
