@@ -4,7 +4,11 @@ Dimensions ``time`` (unlimited), ``particle`` (fixed for the run), ``spatial`` (
 Per frame: time (s), step, position (m), velocity (m/s), density (kg/m^3), pressure (Pa);
 once: mass (kg), radius (m), kind, id. Particles are stored sorted by id, so index i along
 ``particle`` is the same particle in every frame whatever order the core keeps them in.
-The validated case is copied into global attributes named ``section.key``.
+The validated case is copied into global attributes named ``section.key``. A case whose
+walls move adds, per frame, each moving group's pose (``wall_shift``, ``wall_rotation``,
+``wall_velocity``, ``wall_angular_velocity``, along ``wall_group`` in the order of the
+global attribute ``wall_groups``) and once its ``wall_centre``: a point X of a group as
+case.toml draws it is at wall_centre + wall_shift + wall_rotation (X - wall_centre).
 
 The file is netCDF-3 64-bit-data (CDF-5) rather than netCDF-4/HDF5, because
 - HDF5 locks the file while the run has it open, so a second process (a notebook
@@ -58,6 +62,19 @@ STATIC_VARS = {
     "id": ("i8", "id", {"units": "1", "long_name": "particle identifier, stable across the run"}),
 }
 STATE_OF = {"position": "pos", "velocity": "vel", "density": "rho", "pressure": "p"}
+# the poses of the moving wall groups (sphcore.geometry.motion), when the case has any: a
+# point X of group g (where case.toml draws it) is at centre + shift + rotation (X - centre)
+POSE_VARS = {
+    "wall_shift": (("time", "wall_group", "spatial"), "f8",
+                   {"units": "m", "long_name": "translation of each moving wall group"}),
+    "wall_rotation": (("time", "wall_group", "spatial", "body_axis"), "f8",
+                      {"units": "1", "long_name": "rotation of each moving wall group (world axis, body axis)"}),
+    "wall_velocity": (("time", "wall_group", "spatial"), "f8",
+                      {"units": "m s-1", "long_name": "velocity of each moving wall group's centre"}),
+    "wall_angular_velocity": (("time", "wall_group", "axis3"), "f8",
+                              {"units": "rad s-1", "long_name": "angular velocity of each moving wall group "
+                               "(x, y, z; z alone in 2D)"}),
+}
 
 
 def case_attributes(config: dict, prefix: str = "") -> dict:
@@ -191,6 +208,12 @@ class NetcdfWriter(ScheduledWriter):
             for name, field in STATE_OF.items():
                 self.ds[name][self.row] = getattr(st, field)[order]
             self.ds["step"][self.row] = int(ctx.step)
+            for g, group in enumerate(getattr(ctx.case, "moving", ())):
+                pose = group.motion.pose(ctx.t)
+                self.ds["wall_shift"][self.row, g] = pose.shift
+                self.ds["wall_rotation"][self.row, g] = pose.rotation
+                self.ds["wall_velocity"][self.row, g] = pose.velocity
+                self.ds["wall_angular_velocity"][self.row, g] = pose.omega
             self.ds["time"][self.row] = float(ctx.t)  # last: a frame with a time is complete
             # sync: header and data on disk now, so a killed run keeps this frame
             self.ds.sync()
@@ -214,6 +237,17 @@ class NetcdfWriter(ScheduledWriter):
                 var = ds.createVariable(name, dtype, ("particle",), fill_value=False)
                 var.setncatts(attrs)
                 var[:] = getattr(st, field)[order]
+            moving = getattr(case, "moving", ())
+            if moving:
+                ds.createDimension("wall_group", len(moving))
+                ds.createDimension("body_axis", st.dim)
+                ds.createDimension("axis3", 3)
+                ds.setncattr("wall_groups", "; ".join(g.name for g in moving))
+                for name, (dims, dtype, attrs) in POSE_VARS.items():
+                    ds.createVariable(name, dtype, dims, fill_value=False).setncatts(attrs)
+                centre = ds.createVariable("wall_centre", "f8", ("wall_group", "spatial"), fill_value=False)
+                centre.setncatts({"units": "m", "long_name": "centre of rotation of each moving wall group"})
+                centre[:] = np.array([g.motion.pose(0.0).centre for g in moving])
             ds.sync()
         except (OSError, RuntimeError) as err:
             del ds  # not close(): see _abandon

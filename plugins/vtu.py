@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sphcore.api import Option, OutputError, ScheduledWriter, hookimpl, write_atomically
+from sphcore.api import Faces, Option, OutputError, ScheduledWriter, hookimpl, outline, write_atomically
 
 if TYPE_CHECKING:  # meshio is imported where a file is written: a run without VTU output
     import meshio  # (or a case that only names the table) does not pay its import time
@@ -130,6 +130,35 @@ def walls_mesh(faces) -> meshio.Mesh:
     return meshio.Mesh(pts, [("line" if dim == 2 else "triangle", cells)], cell_data={"normal": [normals]})
 
 
+def wall_frame(rel: str, name: str) -> str:
+    """The walls' file beside the particle frame ``rel`` (``vtu/<name>_<k>.vtu``)."""
+    head, _, index = rel.rpartition("_")
+    return f"{head}_walls_{index}"
+
+
+def walls_at(case, t: float):
+    """The faces (nf, dim, dim) of every wall at time t: fixed faces as case.toml draws them,
+    moving groups' faces at their pose, and the outline of the planes (moved with the tank
+    if it moves), or None without any."""
+    faces = getattr(case, "faces", None)
+    nf = faces.count if faces is not None else 0
+    parts = []
+    verts = faces.verts.copy() if nf else None
+    tank = None
+    for g in getattr(case, "moving", ()):
+        pose = g.motion.pose(t)
+        if len(g.faces):
+            verts[g.faces] = pose.to_world(faces.verts[g.faces])
+        if g.planes:
+            tank = pose
+    if nf:
+        parts.append(verts)
+    box = outline(case.planes) if case.planes.count else None
+    if box is not None:
+        parts.append(tank.to_world(box) if tank is not None else box)
+    return np.ascontiguousarray(np.concatenate(parts)) if parts else None
+
+
 def pvd_text(frames: list[tuple[float, str]]) -> str:
     """A ParaView collection listing ``(time in s, path relative to the pvd)`` frames."""
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
@@ -196,7 +225,9 @@ class VtuWriter(ScheduledWriter):
         except OSError as err:
             raise OutputError(f"{path.parent}: cannot create directory: {err.strerror or err}") from err
         walls = getattr(ctx.case, "faces", None)
-        if walls is not None and walls.count and not (out / f"{name}_walls.vtu").exists():
+        if getattr(ctx.case, "moving", ()):
+            self._write_moving_walls(ctx, out, name, rel)
+        elif walls is not None and walls.count and not (out / f"{name}_walls.vtu").exists():
             import meshio
 
             wmesh = walls_mesh(walls)
@@ -209,6 +240,22 @@ class VtuWriter(ScheduledWriter):
         collection = pvd_text(self.frames)
         replace_atomically(self.pvd_path(ctx), lambda tmp: tmp.write_text(collection))
         return path
+
+    def _write_moving_walls(self, ctx, out: Path, name: str, rel: str) -> None:
+        """The walls where they are at ctx.t, beside the frame ``rel`` (``vtu/<name>_walls_<k>.vtu``,
+        listed in ``<name>_walls.pvd``): the finite faces of every group moved by its pose, and
+        the outline of the tank's planes (where they enclose a region)."""
+        import meshio
+
+        verts = walls_at(ctx.case, ctx.t)
+        if verts is None:
+            return
+        wrel = wall_frame(rel, name)
+        wmesh = walls_mesh(Faces(verts))
+        replace_atomically(out / wrel, lambda tmp: meshio.write(tmp, wmesh, file_format="vtu", binary=True))
+        frames = [(t, wall_frame(r, name)) for t, r in self.frames] + [(float(ctx.t), wrel)]
+        collection = pvd_text(frames)
+        replace_atomically(out / f"{name}_walls.pvd", lambda tmp: tmp.write_text(collection))
 
     def reopen_for_restart(self, ctx) -> None:
         """Continue the collection of an earlier run; frames up to ``ctx.t`` are kept.
@@ -229,16 +276,23 @@ class VtuWriter(ScheduledWriter):
         # exact comparison: both times are the same float64 (repr round-trips)
         keep = [f for f in frames if f[0] <= ctx.t]
         frame_dir = (Path(ctx.output_dir) / "vtu").resolve()
+        name = run_name(ctx)
+        moving = bool(getattr(ctx.case, "moving", ()))
         for _, rel in (f for f in frames if f[0] > ctx.t):
-            stale = (Path(ctx.output_dir) / rel).resolve()
-            if stale.parent != frame_dir:
-                continue  # not a frame of ours (an edited collection): never delete it
-            try:
-                stale.unlink(missing_ok=True)
-            except OSError as err:
-                raise OutputError(f"{stale}: cannot remove: {err.strerror}") from err
+            for one in ([rel, wall_frame(rel, name)] if moving else [rel]):
+                stale = (Path(ctx.output_dir) / one).resolve()
+                if stale.parent != frame_dir:
+                    continue  # not a frame of ours (an edited collection): never delete it
+                try:
+                    stale.unlink(missing_ok=True)
+                except OSError as err:
+                    raise OutputError(f"{stale}: cannot remove: {err.strerror}") from err
         self.frames = keep
         replace_atomically(pvd, lambda tmp: tmp.write_text(pvd_text(keep)))
+        if moving:
+            walls_pvd = Path(ctx.output_dir) / f"{name}_walls.pvd"
+            text = pvd_text([(t, wall_frame(r, name)) for t, r in keep])
+            replace_atomically(walls_pvd, lambda tmp: tmp.write_text(text))
         if keep:
             t_last = keep[-1][0]
             self.schedule.resume(t_last, ctx.step if t_last == ctx.t else None)

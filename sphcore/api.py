@@ -14,6 +14,8 @@
   :class:`FaceGrid` (:func:`build_grid`), and for numba kernels :func:`nearest_point`,
   :func:`box_cells`,
   :func:`face_distance`, :func:`first_contact` (swept sphere), :func:`cell_span`;
+  :func:`outline` (the faces of the region planes enclose, for drawing); walls that move:
+  :class:`MovingGroup` (``ctx.case.moving``), its :class:`Motion` and :class:`Pose`;
 - neighbours and kernels for numba kernels: :class:`CellGrid` (its ``.view`` is a
   :class:`Grid`), :func:`cell_of`, :func:`cell_range` (the one neighbour walk),
   :func:`kernel_w`, :func:`kernel_f`, :data:`SUPPORT`, the kernel ids;
@@ -34,7 +36,8 @@ from sphcore.errors import CaseError, Instability, OutputError
 from sphcore.geometry.facegeom import face_distance, first_contact, nearest_point
 from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
 from sphcore.geometry.faces import Faces
-from sphcore.geometry.planes import Planes, particle_distance, plane_distance
+from sphcore.geometry.motion import Motion, MovingGroup, Pose
+from sphcore.geometry.planes import Planes, outline, particle_distance, plane_distance
 from sphcore.io.atomic import write_atomically
 from sphcore.io.schedule import Schedule, schedule_options
 from sphcore.io.writer import ScheduledWriter
@@ -51,7 +54,7 @@ from sphcore.plugin.hookspecs import hookimpl
 __all__ = [
     "hookimpl", "Option", "CaseError", "Instability", "OutputError",
     "RunContext", "Params", "ParticleState", "Sources", "Fields", "WallTerms", "FLUID", "SPHERE", "GHOST",
-    "Planes", "plane_distance", "particle_distance",
+    "Planes", "plane_distance", "particle_distance", "outline", "Motion", "MovingGroup", "Pose",
     "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "face_distance", "first_contact",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
     "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",

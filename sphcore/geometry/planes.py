@@ -99,3 +99,44 @@ def recession_direction(normals: np.ndarray, tol: float = 1e-12):
             if np.all(normals @ u >= -tol):
                 return u
     return None
+
+
+def outline(planes: Planes):
+    """The boundary of the region the planes enclose, as faces (segments in 2D, triangles
+    in 3D, (nf, dim, dim) m) for drawing a tank, or None when the region is unbounded or
+    empty. The region's corners are the points where dim planes meet and no plane is
+    violated (within 1e-9 of the region's size); each plane's corners, in order about
+    their centre, make its face."""
+    normals, offsets = planes.normals, planes.offsets
+    k, dim = normals.shape
+    if k < dim + 1 or recession_direction(normals) is not None:
+        return None
+    scale = 1.0 + float(np.abs(planes.points).max())
+    corners = []
+    for idx in combinations(range(k), dim):
+        a = normals[list(idx)]
+        if abs(np.linalg.det(a)) < 1e-12:
+            continue
+        x = np.linalg.solve(a, offsets[list(idx)])
+        if np.all(normals @ x - offsets >= -1e-9 * scale):
+            corners.append(x)
+    if len(corners) < dim + 1:
+        return None
+    corners = np.unique(np.round(np.array(corners) / (1e-9 * scale)) * (1e-9 * scale), axis=0)
+    faces = []
+    for j in range(k):
+        on = corners[np.abs(corners @ normals[j] - offsets[j]) <= 1e-9 * scale]
+        if len(on) < dim:
+            continue
+        c = on.mean(axis=0)
+        if dim == 2:
+            t = np.array([-normals[j, 1], normals[j, 0]])
+            on = on[np.argsort((on - c) @ t)]
+            faces.append([on[0], on[-1]])
+            continue
+        u = np.cross(normals[j], [1.0, 0.0, 0.0] if abs(normals[j, 0]) < 0.9 else [0.0, 1.0, 0.0])
+        u /= np.linalg.norm(u)
+        w = np.cross(normals[j], u)
+        on = on[np.argsort(np.arctan2((on - c) @ w, (on - c) @ u))]
+        faces += [[on[0], on[i], on[i + 1]] for i in range(1, len(on) - 1)]
+    return np.ascontiguousarray(np.array(faces, dtype=np.float64)) if faces else None

@@ -30,6 +30,11 @@ class ScheduledWriter:
         self.schedule = Schedule.from_config(case, self.table)
 
     @hookimpl
+    def sph_moving_walls(self):
+        # a writer writes what the run holds, wherever its walls are
+        return True
+
+    @hookimpl
     def sph_setup(self, ctx):
         # the restart's files are trimmed to the checkpoint at the first output call, where
         # ctx.t and ctx.step are those of the restart point

@@ -1,0 +1,82 @@
+"""What a run with moving walls writes: each moving group's pose in particles.nc at every
+frame, the walls where they are beside every VTU frame, and a restart from the middle of a
+rolling-tank run that continues bit for bit."""
+
+from __future__ import annotations
+
+import math
+
+import random
+
+import netCDF4
+import numpy as np
+import pytest
+import pyvista as pv
+from test_run_lifecycle import checkpoint_by_id
+from test_run_survival import kill_and_restart
+
+from sphcore.run import runner
+from sphcore.testing import case_with, tiny_case, write_case
+
+ROLL = {"type": "sine_rotation", "centre": [0.5, 0.0], "amplitude": 6.0, "frequency": 2.0, "ramp": 0.02}
+PADDLE = {"shape": "box", "min": [0.7, 0.0], "max": [0.75, 0.3],
+          "motion": [{"type": "sine_translation", "axis": [1.0, 0.0], "amplitude": 0.05, "frequency": 3.0}]}
+
+
+def _case(tmp_path, name, changes=None):
+    return write_case(tmp_path / name, case_with(tiny_case(), {
+        "blocks[0].max": [0.6, 0.15], "time.t_end": 0.08, "plugins.use": ["reflective", "vtu", "netcdf"],
+        "vtu.every_dt": 0.02, "netcdf.every_dt": 0.02, "domain.motion": [ROLL], "domain.walls": [PADDLE],
+        **(changes or {})}))
+
+
+def test_poses_and_walls_are_written_at_every_frame(tmp_path):
+    out = tmp_path / "out"
+    result = runner.run(_case(tmp_path, "case"), output=out, quiet=True)
+    assert result["status"] == "completed", result["message"]
+    case = result.simulation.case
+    with netCDF4.Dataset(out / "particles.nc") as ds:
+        assert ds.wall_groups == "domain.motion; domain.walls[0].motion"
+        times = ds["time"][:]
+        assert len(times) == 5
+        for k, t in enumerate(times):
+            for g, group in enumerate(case.moving):
+                pose = group.motion.pose(float(t))
+                assert np.array_equal(ds["wall_shift"][k, g], pose.shift)
+                assert np.array_equal(ds["wall_rotation"][k, g], pose.rotation)
+                assert np.array_equal(ds["wall_velocity"][k, g], pose.velocity)
+        assert ds["wall_shift"].units == "m" and ds["wall_angular_velocity"].units == "rad s-1"
+    frames = pv.read(out / "case_walls.pvd")
+    assert frames.n_blocks == 1  # the collection reads (ParaView steps through it)
+    for k, t in enumerate(times):
+        walls = pv.read(out / "vtu" / f"case_walls_{k:06d}.vtu")
+        assert walls.n_cells == 4 + 4  # the paddle's box and the tank's outline
+        # the paddle's faces where its motion puts them (the first four cells)
+        x = 0.7 + 0.05 * math.sin(2 * math.pi * 3.0 * float(t))
+        assert walls.points[:8, 0].min() == np.float64(x) or abs(walls.points[:8, 0].min() - x) < 1e-12
+        # the tank's corner at the floor's right end, rolled about (0.5, 0)
+        theta = case.moving[0].motion.pose(float(t))
+        corner = theta.to_world(np.array([1.0, 0.0]))
+        assert np.abs(walls.points[8:, :2] - corner).sum(axis=1).min() < 1e-12
+
+
+@pytest.mark.slow
+def test_sigkill_in_the_middle_of_a_moving_run_then_restart_is_bit_for_bit(tmp_path):
+    """The rolling tank with its swinging paddle, killed (SIGKILL) at random moments and
+    restarted: the particles, the frames and the walls' poses are those of the run that
+    was never stopped (a prescribed motion is a function of time: the checkpoint's clock
+    is all it needs)."""
+    case_dir = _case(tmp_path, "case", {"time.t_end": 0.3, "output.checkpoint_every_dt": 0.02})
+    ref = tmp_path / "ref"
+    whole = runner.run(case_dir, output=ref, quiet=True)
+    assert whole["status"] == "completed"
+    out = tmp_path / "out"
+    hit = kill_and_restart(case_dir, out, kills=2, rng=random.Random(37), stepping_s=whole["wall_time_s"])
+    assert hit >= 1
+    (meta, final), (ref_meta, want) = checkpoint_by_id(out), checkpoint_by_id(ref)
+    assert meta["t"] == ref_meta["t"] and meta["step"] == ref_meta["step"]
+    for key in ("id", "pos", "vel", "rho", "p"):
+        assert np.array_equal(final[key], want[key]), key
+    with netCDF4.Dataset(ref / "particles.nc") as x, netCDF4.Dataset(out / "particles.nc") as y:
+        for name in ("time", "step", "wall_shift", "wall_rotation", "wall_velocity", "position", "velocity"):
+            assert np.array_equal(x[name][:], y[name][:]), name
