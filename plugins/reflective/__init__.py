@@ -175,8 +175,12 @@ class ReflectivePlugin:
             guarded, hit, events = reflect_step(Paths(pos0, pos, vel, acc, ctx.state.radius), self.group,
                                                 self.response, tally, self.scratch)
         else:
+            loads = {}
             guarded, hit, events, pinched = reflect_moving(self.groups, ctx.t, dt, pos0, pos, vel, acc,
-                                                           ctx.state.radius, self.response, tally, self.scratch)
+                                                           ctx.state.radius, self.response, tally, self.scratch,
+                                                           ctx.state.m, loads)
+            for name, (impulse, angular) in loads.items():
+                ctx.add_wall_load(name, impulse, angular)
             stats = ctx.stats(self)
             stats["pinched"] = stats.get("pinched", 0) + pinched
         # ctx.stats: in summary.json under "reflective" and in every checkpoint, so the

@@ -108,10 +108,13 @@ def select(faces, index):
     return Faces(np.ascontiguousarray(faces.verts[index]), tuple(groups))
 
 
-def reflect_moving(groups, t, dt, pos0, pos, vel, acc, radius, response, tally, work):
+def reflect_moving(groups, t, dt, pos0, pos, vel, acc, radius, response, tally, work, mass=None, loads=None):
     """Reflect every particle that crossed a wall of any group during the step from t to
     t + dt (s); ``pos`` and ``vel`` in place. Returns (guard returns, particle-steps
-    reflected, reflections, pinched particle-steps)."""
+    reflected, reflections, pinched particle-steps). With ``mass`` (n,) (kg) and a dict
+    ``loads``, each moving group's name gets what its walls took from the fluid this step:
+    (impulse (3,) N s, angular impulse about its centre of rotation at t + dt (3,) N m s),
+    the negative of the momentum its reflections gave the particles."""
     guarded = events = 0
     touched = np.zeros(pos.shape[0], bool)
     for sweep in range(MAX_SWEEPS):
@@ -132,8 +135,18 @@ def reflect_moving(groups, t, dt, pos0, pos, vel, acc, radius, response, tally, 
                 if hit or gd:
                     changed = (tally.reflections > 0) | (tally.guarded > 0)
                     x = p1.to_world(b1[changed])
+                    v_new = vb[changed] @ R.T + p1.point_velocity(x)
+                    if loads is not None and mass is not None:
+                        dp = mass[changed, None] * (v_new - vel[changed])  # what the walls gave
+                        arm = x - p1.centre - p1.shift
+                        imp, ang = loads.setdefault(g.name, (np.zeros(3), np.zeros(3)))
+                        imp[:dp.shape[1]] -= dp.sum(axis=0)
+                        if dp.shape[1] == 2:
+                            ang[2] -= float((arm[:, 0] * dp[:, 1] - arm[:, 1] * dp[:, 0]).sum())
+                        else:
+                            ang -= np.cross(arm, dp).sum(axis=0)
                     pos[changed] = x
-                    vel[changed] = vb[changed] @ R.T + p1.point_velocity(x)
+                    vel[changed] = v_new
             guarded, events = guarded + gd, events + ev
             if changed is not None:
                 any_hit = True

@@ -156,6 +156,19 @@ class RunContext:
         """State of ``plugin`` that a checkpoint keeps and a restart restores."""
         return self.run.kept.setdefault(plugin if isinstance(plugin, str) else self._name_of(plugin), {})
 
+    def add_wall_load(self, group: str, impulse, angular_impulse) -> None:
+        """Add what the fluid gave the walls of the moving group ``group`` (its name in
+        ``case.moving``) during the current step: the momentum (N s; N s/m in 2D) and the
+        angular momentum about the group's centre of rotation where it is (N m s; about z in
+        2D), each as up to three components. Plugins whose walls take momentum from the fluid
+        (reflective impulses, ghost or wall-model pressure forces times dt) add here; the
+        ``wall_loads`` writer turns the sums into forces and moments. Kept across a restart."""
+        acc = self.run.kept.setdefault("wall_impulses", {}).setdefault(group, [0.0] * 6)
+        for k, v in enumerate(impulse):
+            acc[k] += float(v)
+        for k, v in enumerate(angular_impulse):
+            acc[3 + k] += float(v)
+
     def _name_of(self, plugin) -> str:
         """The registered name of ``plugin``, looked up once per plugin (pluggy's lookup walks
         every registered plugin; the reflective walls ask on every step). The plugin is kept
