@@ -16,6 +16,22 @@
     [[probes.depth]]
     name = "H1"
     point = [1.0, 0.0]                   # a point on the floor (m)
+
+Sensors ride with walls that move (``[[domain.motion]]``, ``[[domain.walls.motion]]``)
+when they name the wall group with ``attach``:
+
+    [[probes.pressure]]
+    name = "paddle"
+    point = [0.7, 0.05]                  # where case.toml draws the wall (t = 0)
+    attach = "walls[1]"                  # rides with [[domain.walls]] entry 1; "tank": with the tank
+
+An attached sensor's point, start, end and normal are given in the frame case.toml draws
+the walls in; at every sample they are where the group's motion has carried them, and a
+wall-mode sensor carries the particle pressures to its points with the apparent gravity
+g - a_w of the wall's frame (a_w the acceleration of the wall at the point). An attached
+depth gauge measures along the group's own up (-g turned with the group) from its moving
+floor point. A wall with ``tank = true`` moves with the tank: ``walls[k]`` names the tank
+for it. A sensor without ``attach`` stays where it is drawn, whatever moves.
 """
 
 from __future__ import annotations
@@ -58,6 +74,11 @@ PRESSURE = {
                         + ", ".join(reference.SERIES), nullable=True),
     "H": Option(None, "float", "m", "column height that scales the reference (p/(rho g H), t sqrt(g/H))",
                 positive=True, nullable=True),
+    "attach": Option(None, "str", doc="the moving walls the sensor rides with: \"tank\" ([[domain.motion]]) "
+                     "or \"walls[k]\" ([[domain.walls]] entry k, with a motion of its own or tank = true); "
+                     "point, start, end and normal are then where case.toml draws the walls, and move with "
+                     "them; wall mode uses the apparent gravity g - a_w of the wall's frame. "
+                     "Default: the sensor stays where it is drawn", nullable=True),
 }
 
 #: keys of one ``[[probes.depth]]`` entry
@@ -65,6 +86,10 @@ DEPTH = {
     "name": PRESSURE["name"],
     "point": Option(None, "vector", "m", "a point on the floor; the depth is measured above it along -g",
                     nullable=True),
+    "attach": Option(None, "str", doc="the moving walls the gauge rides with: \"tank\" or \"walls[k]\" "
+                     "(see probes.pressure's attach); point is then where case.toml draws the walls, and the "
+                     "depth is measured along -g turned with them. Default: the gauge stays where it is drawn "
+                     "and measures along -g", nullable=True),
 }
 
 
@@ -83,6 +108,9 @@ class Probe:
     face_n: np.ndarray | None = None
     reference: str | None = None
     height: float | None = None
+    #: ``attach`` as given, and the moving group it names (``case.moving[k].name``); None: fixed
+    attach: str | None = None
+    group: str | None = None
 
 
 def _vec(file, key, value, dim):
@@ -145,6 +173,45 @@ def _face_normal(case, file, key, e, pts) -> np.ndarray | None:
     return n / norm
 
 
+WALL_RE = re.compile(r"^walls\[(\d+)\]$")
+
+
+def _group(case, file, key, attach) -> str | None:
+    """The moving group (``case.moving[k].name``) that ``attach`` names: "tank" the tank
+    (``domain.motion``), "walls[k]" the wall's own motion, or the tank's for a wall with
+    tank = true. None when ``attach`` is None."""
+    if attach is None:
+        return None
+    moving = {g.name for g in getattr(case, "moving", ())}
+    walls = case.config["domain"]["walls"]
+    names = (["tank"] if "domain.motion" in moving else []) + [
+        f"walls[{k}]" for k, w in enumerate(walls)
+        if (w.get("tank", False) and "domain.motion" in moving) or f"domain.walls[{k}].motion" in moving]
+    can = (f"; the walls that move here: {', '.join(repr(n) for n in names)}" if names else
+           "; no wall moves in this case ([[domain.motion]], [[domain.walls.motion]]): remove attach")
+    m = WALL_RE.match(attach)
+    if attach == "tank":
+        if "domain.motion" in moving:
+            return "domain.motion"
+        raise CaseError(file, key, "expected a wall group that moves, but the tank has no [[domain.motion]]" + can)
+    if m is None:
+        raise CaseError(file, key, f"expected \"tank\" or \"walls[k]\" (k the index of a [[domain.walls]] "
+                        f"entry), got {attach!r}" + can)
+    k = int(m.group(1))
+    if k >= len(walls):
+        raise CaseError(file, key, f"expected \"walls[k]\" with k < {len(walls)} (the case has {len(walls)} "
+                        f"[[domain.walls]] entries), got {attach!r}" + can)
+    if walls[k].get("tank", False):
+        if "domain.motion" in moving:
+            return "domain.motion"
+        raise CaseError(file, key, f"expected a wall that moves, but {attach} moves with the tank (tank = true) "
+                        "and the tank has no [[domain.motion]]" + can)
+    if f"domain.walls[{k}].motion" in moving:
+        return f"domain.walls[{k}].motion"
+    raise CaseError(file, key, f"expected a wall that moves, but {attach} has no motion "
+                    "([[domain.walls.motion]]) and does not move with the tank" + can)
+
+
 def _name(file, key, e, seen):
     name = e["name"]
     if name is None:
@@ -190,7 +257,9 @@ def parse(case) -> tuple[float, list[Probe]]:
                 raise CaseError(file, f"{key}.H", f"required with reference = {ref!r}: the column height (m) that "
                                 "scales p/(rho g H) and t sqrt(g/H)")
         face_n = _face_normal(case, file, key, e, pts)
-        probes.append(Probe(name, "pressure", key, start, end, pts, e["mode"], face_n, ref, e["H"]))
+        group = _group(case, file, f"{key}.attach", e["attach"])
+        probes.append(Probe(name, "pressure", key, start, end, pts, e["mode"], face_n, ref, e["H"],
+                            attach=e["attach"], group=group))
     for k, entry in enumerate(cfg["depth"]):
         key = f"{TABLE}.depth[{k}]"
         e = validate_table(DEPTH, entry, file, key)
@@ -199,7 +268,8 @@ def parse(case) -> tuple[float, list[Probe]]:
             raise CaseError(file, f"{key}.point", "required: a point on the floor")
         x0 = _vec(file, f"{key}.point", e["point"], dim)
         _inside(case, file, f"{key}.point", x0)
-        probes.append(Probe(name, "depth", key, x0, x0.copy(), x0[None, :].copy()))
+        group = _group(case, file, f"{key}.attach", e["attach"])
+        probes.append(Probe(name, "depth", key, x0, x0.copy(), x0[None, :].copy(), attach=e["attach"], group=group))
     if not probes:
         raise CaseError(file, TABLE, "no probe: add [[probes.pressure]] or [[probes.depth]] tables, "
                         "or remove probes from plugins.use")

@@ -6,12 +6,24 @@ its peak and, where the probe names a shipped experiment, the error figures of
 :mod:`sphcore_plugins.probes.figures` in the run summary. Sampling itself is
 :mod:`sphcore_plugins.probes.sampling` (numba, plain arrays).
 
+Walls that move: a sensor with ``attach`` rides with its wall group (see
+:mod:`sphcore_plugins.probes.config`): at each sample its points are those of case.toml
+carried to the group's pose at ``t`` (``pose.to_world``), its face's normal turned with
+the group, and a wall-mode sensor reads with the apparent gravity g - a_w at each of its
+points (a_w the wall's acceleration there: in the wall's frame water at rest has grad p =
+rho (g - a_w)). An attached depth gauge measures along the group's up (-g turned with the
+group). Depth gauges read the planes where they are at ``t`` (``ctx.planes``) whenever the
+tank moves. A case where nothing is attached and no plane moves samples as with fixed
+walls, with the arrays computed once at set-up.
+
 Reads from the run context: ``state`` (pos, rho, p, m, kind), ``t``, ``step``,
-``output_dir``, ``params`` (h, kernel_id, rho0, gravity), ``restarting``, ``walls`` and
-``case`` (config, file, dir, dim, dx).
+``output_dir``, ``params`` (h, kernel_id, rho0, gravity), ``restarting``, ``planes``
+(where they are at ``t``) and ``case`` (config, file, dir, dim, dx, moving).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -33,6 +45,24 @@ def ceiling_distance(x0, up, normals, offsets) -> float:
     return float(np.min(dist[ahead] / -facing[ahead])) if ahead.any() else 0.0
 
 
+@dataclass
+class Placement:
+    """Where one probe samples at one time: ``points`` (k, dim), the segment [``a``, ``b``]
+    whose neighbourhood holds the particles it reads, the face's normal ``face_n`` (zeros:
+    none), ``gravity`` (k, dim) the apparent gravity at each point (None: g, a fixed
+    probe), ``up`` the direction a depth gauge measures along, and the tank's planes
+    (``normals``, ``offsets``) at that time."""
+
+    points: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    face_n: np.ndarray
+    gravity: np.ndarray | None
+    up: np.ndarray
+    normals: np.ndarray
+    offsets: np.ndarray
+
+
 class ProbesPlugin:
     """Pluggy plugin ``probes`` (case table ``[probes]``, see :mod:`sphcore_plugins.probes.config`)."""
 
@@ -44,6 +74,7 @@ class ProbesPlugin:
         self._failed = False
         self._restart_step: int | None = None
         self._csv_rows = -1  # samples in the last probes.csv written
+        self.motions, self.planes_move, self.moves = [], False, False
 
     @hookimpl
     def sph_options(self):
@@ -53,6 +84,17 @@ class ProbesPlugin:
     def sph_configure(self, case):
         every_dt, self.probes = parse(case)
         self.schedule = Schedule(every_dt=every_dt) if every_dt > 0 else Schedule(every_steps=1)
+        moving = getattr(case, "moving", ())
+        # the motion of each probe's wall group (None: fixed), and whether the tank's planes move
+        self.motions = [next(g.motion for g in moving if g.name == p.group) if p.group else None
+                        for p in self.probes]
+        self.planes_move = any(g.planes for g in moving)
+        # where probes or planes move, the probes are placed anew at every sample (place)
+        self.moves = self.planes_move or any(m is not None for m in self.motions)
+
+    @hookimpl
+    def sph_moving_walls(self):
+        return True
 
     @hookimpl
     def sph_setup(self, ctx):
@@ -81,6 +123,7 @@ class ProbesPlugin:
         # the face each wall sensor sits on (zeros: none, every particle is read)
         self.face_n = [np.ascontiguousarray(p.face_n if p.face_n is not None else np.zeros(dim))
                        for p in self.probes]
+        self.case_planes = case.planes
         self.rho0 = float(ctx.params.rho0)
         self.config, self.case_name = case.config, case.config["case"]["name"] or case.dir.name
         # a restart keeps the samples up to the checkpoint's step, found at the first output
@@ -88,11 +131,44 @@ class ProbesPlugin:
 
     # ------------------------------------------------------------------ sampling
 
-    def sample(self, state):
-        """(values, dry) of every probe for the particle arrays of ``state``."""
+    def place(self, t, planes) -> list[Placement]:
+        """Where every probe samples at time ``t`` (s), the tank's ``planes`` being where they
+        are then: see :class:`Placement`. A fixed probe keeps its set-up arrays."""
+        poses = {}
+        normals = np.ascontiguousarray(planes.normals, dtype=float)
+        offsets = np.ascontiguousarray(planes.offsets, dtype=float)
+        out = []
+        for k, p in enumerate(self.probes):
+            motion = self.motions[k]
+            if motion is None:
+                points, face_n, up, gravity = p.points, self.face_n[k], self.up, None
+            else:
+                pose = poses.get(p.group)
+                if pose is None:
+                    pose = poses[p.group] = motion.pose(t)
+                points = np.ascontiguousarray(pose.to_world(p.points))
+                face_n = np.ascontiguousarray(pose.direction_to_world(self.face_n[k]))
+                up = np.ascontiguousarray(pose.direction_to_world(self.up))
+                gravity = np.ascontiguousarray(self.gravity[None, :] - pose.point_acceleration(points))
+            if p.kind == "depth":
+                x0 = points[0]
+                a, b = x0, x0 + ceiling_distance(x0, up, normals, offsets) * up
+            elif motion is None:
+                a, b = p.start, p.end
+            else:
+                a, b = pose.to_world(p.start), pose.to_world(p.end)
+            out.append(Placement(points, a, b, face_n, gravity, up, normals, offsets))
+        return out
+
+    def sample(self, state, t=0.0, planes=None):
+        """(values, dry) of every probe for the particle arrays of ``state`` at time ``t``
+        (s), the tank's ``planes`` being where they are then (None: those of case.toml;
+        only read where probes or planes move)."""
         n = state.pos.shape[0]
         if self.idx.shape[0] < n:
             self.idx = np.empty(n, np.int64)
+        if self.moves:
+            return self._sample_moving(state, self.place(t, self.case_planes if planes is None else planes))
         pos = np.ascontiguousarray(state.pos)
         c = select_near(pos, np.ascontiguousarray(state.kind), self.seg_a, self.seg_b, SUPPORT * self.h, self.idx)
         near = self.idx[:c]
@@ -111,6 +187,34 @@ class ProbesPlugin:
                 dry[k] = values[k] == 0.0
         return values, dry
 
+    def _sample_moving(self, state, placed):
+        """:meth:`sample` with the probes where ``placed`` (:meth:`place`) puts them."""
+        pos = np.ascontiguousarray(state.pos)
+        seg_a = np.ascontiguousarray([q.a for q in placed])
+        seg_b = np.ascontiguousarray([q.b for q in placed])
+        c = select_near(pos, np.ascontiguousarray(state.kind), seg_a, seg_b, SUPPORT * self.h, self.idx)
+        near = self.idx[:c]
+        pc, rc, mc, prc = pos[near], state.rho[near], state.m[near], state.p[near]
+        values, dry = np.zeros(len(self.probes)), np.zeros(len(self.probes), np.int8)
+        for k, (p, q) in enumerate(zip(self.probes, placed)):
+            if p.kind == "pressure":
+                out_p, out_w = self.work[k]
+                wall = p.mode == "wall"
+                if q.gravity is None:
+                    interpolate_pressure(q.points, pc, prc, rc, mc, self.kernel_id, self.h, self.gravity,
+                                         wall, q.face_n, out_p, out_w)
+                else:  # the apparent gravity differs from point to point on a turning wall
+                    for s in range(q.points.shape[0]):
+                        interpolate_pressure(q.points[s:s + 1], pc, prc, rc, mc, self.kernel_id, self.h,
+                                             q.gravity[s], wall, q.face_n, out_p[s:s + 1], out_w[s:s + 1])
+                values[k] = out_p.mean()
+                dry[k] = not (out_w > 0).any()
+            else:
+                values[k] = depth_above(q.points[0], q.up, self.ds, pc, rc, mc, self.kernel_id, self.h,
+                                        q.normals, q.offsets)
+                dry[k] = values[k] == 0.0
+        return values, dry
+
     # ------------------------------------------------------------------ output
 
     @hookimpl
@@ -118,7 +222,7 @@ class ProbesPlugin:
         if self._restart_step is not None:
             self._reopen(ctx)
         if self.schedule.due(ctx.t, ctx.step, final):
-            values, dry = self.sample(ctx.state)
+            values, dry = self.sample(ctx.state, ctx.t, ctx.planes) if self.moves else self.sample(ctx.state)
             self.times.append(float(ctx.t))
             self.steps.append(int(ctx.step))
             self.values.append(values)

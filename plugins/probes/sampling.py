@@ -19,15 +19,18 @@ Definitions (h the smoothing length, W the run's kernel, V_j = m_j / rho_j):
   a transducer is pressed by the water touching its face, not by water round a convex edge
   of the wall within 2h of it (the flow over the top of an obstacle, below which a sensor
   sits); on a plane wall or inside a concave corner no particle lies behind the face, so
-  the filter changes nothing there;
+  the filter changes nothing there. On a sensor riding with moving walls g is the apparent
+  gravity g - a_w of the wall's frame (a_w the wall's acceleration at the sensor point),
+  the field in which water at rest relative to the wall is hydrostatic;
 - no fluid particle within 2h of the point: the point is dry, p = 0 (gauge) and flagged;
 - fluid fraction: phi(x) = sum_j V_j W(x - x_j), each particle also counted through its
   mirror image across every wall plane closer than 2h to x (a wall would otherwise cut the
   kernel and halve phi at the floor); phi is ~1 in water, 0 in air, 0.5 at a free surface;
-- water depth above a floor point x0: scanning up from x0 along -g in steps ds, the
-  distance s at which phi first drops below 0.5 (linear interpolation between the last
-  step at or above 0.5 and the first below it); 0 when phi(x0) < 0.5 (dry). Water above an
-  air gap (spray, an overturning jet) does not count: only the first crossing does.
+- water depth above a floor point x0: scanning up from x0 along -g (a gauge riding with
+  moving walls: -g turned with them) in steps ds, the distance s at which phi first drops
+  below 0.5 (linear interpolation between the last step at or above 0.5 and the first
+  below it); 0 when phi(x0) < 0.5 (dry). Water above an air gap (spray, an overturning
+  jet) does not count: only the first crossing does.
 """
 
 from __future__ import annotations

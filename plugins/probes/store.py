@@ -6,7 +6,11 @@ killed run keeps every synced sample; see :mod:`sphcore_plugins.netcdf`). Dimens
 and ``depth`` (m) NaN in those of pressure probes; ``dry`` is 1 where no fluid particle was
 within the kernel support of any sample point (pressure 0, depth 0). The probes' names,
 kinds, modes, extents (``probe_start``/``probe_end``, m), column heights H and reference
-names are variables along ``probe``; ``rho0`` and ``g`` are global attributes.
+names are variables along ``probe``; ``rho0`` and ``g`` are global attributes. Where a
+sensor rides with moving walls, ``probe_attach`` names their group ("tank", "walls[k]";
+empty for a fixed sensor) and its extent is where case.toml draws the walls (the walls'
+pose at every frame is in ``particles.nc``); a file with no attached sensor has no
+``probe_attach``.
 """
 
 from __future__ import annotations
@@ -91,6 +95,13 @@ class ProbeFile:
             hv = ds.createVariable("probe_H", "f8", ("probe",), fill_value=False)
             hv.setncatts({"units": "m", "long_name": "column height that scales the reference (NaN: none)"})
             hv[:] = [np.nan if p.height is None else p.height for p in probes]
+            if any(p.attach for p in probes):
+                attach, awidth = _chars([p.attach or "" for p in probes])
+                ds.createDimension("attach_strlen", awidth)
+                av = ds.createVariable("probe_attach", "S1", ("probe", "attach_strlen"))
+                av.setncatts({"long_name": "moving walls the sensor rides with (empty: fixed); probe_start and "
+                              "probe_end are then where case.toml draws the walls"})
+                av[:] = attach
             ds.sync()
         except (OSError, RuntimeError) as err:
             del ds  # not close(): see sphcore_plugins.netcdf.NetcdfWriter._abandon
