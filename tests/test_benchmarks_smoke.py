@@ -104,6 +104,13 @@ def test_bench_loaded_prints_each_variants_time_and_ratio():
         figure(median_s, ratio)
 
 
+def test_bench_moving_prints_the_moving_tanks_cost_against_the_fixed_one():
+    out = output(script("speed/bench_moving.py", "--n", 600, "--steps", 2, "--pairs", 1))
+    for name in ("fixed", "moving"):
+        figure(*rows(rf"{name}\s+({NUM})\s+({NUM})", out, 1)[0])
+    figure(*rows(rf"moving / fixed: ({NUM}) \(pairs ({NUM}) \.\. ({NUM})\)", out, 1)[0])
+
+
 def test_bench_output_prints_what_the_writers_cost():
     out = output(script("speed/bench_output.py", "--t-end", 0.01, "--scales", 1))
     (particles, frames, mb, with_s, without_s, share, ms_frame), = rows(

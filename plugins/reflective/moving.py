@@ -40,7 +40,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.api import Faces
+from numba import prange
+
+from sphcore.api import Faces, by_size
 
 from .collision import Paths, Tally, WallGroup, face_arrays, reflect_step
 
@@ -57,6 +59,13 @@ class Group:
         self.name, self.motion, self.faces = name, motion, faces
         self.walls = WallGroup.of(normals, offsets, face_arrays(None, normals.shape[1], 1.0))
         self.normals, self.offsets = normals, offsets
+        self._frame = None
+
+    def frame(self, shape):
+        """Scratch (b0, b1, vb, ab), each ``shape``, for the particles in the group's frame."""
+        if self._frame is None or self._frame[0].shape != shape:
+            self._frame = tuple(np.empty(shape) for _ in range(4))
+        return self._frame
 
     def build_grid(self, radius):
         """The faces' grid, once the particle radius is known (its cells are sized by it)."""
@@ -126,10 +135,9 @@ def reflect_moving(groups, t, dt, pos0, pos, vel, acc, radius, response, tally, 
             else:
                 p0, p1 = g.motion.pose(t), g.motion.pose(t + dt)
                 R = p1.rotation
-                b0 = np.ascontiguousarray(p0.to_body(pos0))
-                b1 = np.ascontiguousarray(p1.to_body(pos))
-                vb = np.ascontiguousarray((vel - p1.point_velocity(pos)) @ R)
-                ab = np.ascontiguousarray((acc - p1.point_acceleration(pos)) @ R)
+                frame = g.frame(pos.shape)
+                into_frame(pos0, pos, vel, acc, frame_of(p0, p1), *frame)
+                b0, b1, vb, ab = frame
                 gd, hit, ev = reflect_step(Paths(b0, b1, vb, ab, radius), g.walls, response, tally, work)
                 changed = None
                 if hit or gd:
@@ -168,3 +176,64 @@ def outside_any(group, t, pos, radius):
         return np.zeros(pos.shape[0], bool)
     d = b @ group.normals.T - group.offsets
     return (d < (radius * (1.0 - 1e-9))[:, None]).any(axis=1)
+
+
+def frame_of(p0, p1):
+    """The two poses as the arrays :func:`into_frame` takes: R0, D0, R1, D1, the centre c,
+    and at t + dt the velocity V, acceleration A and the angular velocity and acceleration
+    (3-vectors)."""
+    return (np.ascontiguousarray(p0.rotation), np.ascontiguousarray(p0.shift, dtype=np.float64),
+            np.ascontiguousarray(p1.rotation), np.ascontiguousarray(p1.shift, dtype=np.float64),
+            np.ascontiguousarray(p1.centre, dtype=np.float64), np.ascontiguousarray(p1.velocity, dtype=np.float64),
+            np.ascontiguousarray(p1.acceleration, dtype=np.float64), np.ascontiguousarray(p1.omega, dtype=np.float64),
+            np.ascontiguousarray(p1.alpha, dtype=np.float64))
+
+
+@by_size
+def into_frame(pos0, pos, vel, acc, poses, b0, b1, vb, ab):
+    """The step's paths in a moving group's frame (module docstring), in one pass:
+    b0 = c + R0^T (x0 - c - D0), b1 = c + R1^T r with r = x1 - c - D1,
+    vb = R1^T (v - V - Omega x r), ab = R1^T (a - A - alpha x r - Omega x (Omega x r))."""
+    R0, D0, R1, D1, c, V, A, w, al = poses
+    n, dim = pos.shape
+    for i in prange(n):
+        if dim == 2:
+            x0 = pos0[i, 0] - c[0] - D0[0]
+            y0 = pos0[i, 1] - c[1] - D0[1]
+            b0[i, 0] = c[0] + R0[0, 0] * x0 + R0[1, 0] * y0
+            b0[i, 1] = c[1] + R0[0, 1] * x0 + R0[1, 1] * y0
+            rx = pos[i, 0] - c[0] - D1[0]
+            ry = pos[i, 1] - c[1] - D1[1]
+            b1[i, 0] = c[0] + R1[0, 0] * rx + R1[1, 0] * ry
+            b1[i, 1] = c[1] + R1[0, 1] * rx + R1[1, 1] * ry
+            wz = w[2]
+            az = al[2]
+            ux = vel[i, 0] - (V[0] - wz * ry)
+            uy = vel[i, 1] - (V[1] + wz * rx)
+            vb[i, 0] = R1[0, 0] * ux + R1[1, 0] * uy
+            vb[i, 1] = R1[0, 1] * ux + R1[1, 1] * uy
+            gx = acc[i, 0] - (A[0] - az * ry - wz * wz * rx)
+            gy = acc[i, 1] - (A[1] + az * rx - wz * wz * ry)
+            ab[i, 0] = R1[0, 0] * gx + R1[1, 0] * gy
+            ab[i, 1] = R1[0, 1] * gx + R1[1, 1] * gy
+        else:
+            p0 = pos0[i, 0] - c[0] - D0[0]
+            p1 = pos0[i, 1] - c[1] - D0[1]
+            p2 = pos0[i, 2] - c[2] - D0[2]
+            r0 = pos[i, 0] - c[0] - D1[0]
+            r1 = pos[i, 1] - c[1] - D1[1]
+            r2 = pos[i, 2] - c[2] - D1[2]
+            wr0 = w[1] * r2 - w[2] * r1
+            wr1 = w[2] * r0 - w[0] * r2
+            wr2 = w[0] * r1 - w[1] * r0
+            u0 = vel[i, 0] - (V[0] + wr0)
+            u1 = vel[i, 1] - (V[1] + wr1)
+            u2 = vel[i, 2] - (V[2] + wr2)
+            g0 = acc[i, 0] - (A[0] + al[1] * r2 - al[2] * r1 + w[1] * wr2 - w[2] * wr1)
+            g1 = acc[i, 1] - (A[1] + al[2] * r0 - al[0] * r2 + w[2] * wr0 - w[0] * wr2)
+            g2 = acc[i, 2] - (A[2] + al[0] * r1 - al[1] * r0 + w[0] * wr1 - w[1] * wr0)
+            for d in range(3):
+                b0[i, d] = c[d] + R0[0, d] * p0 + R0[1, d] * p1 + R0[2, d] * p2
+                b1[i, d] = c[d] + R1[0, d] * r0 + R1[1, d] * r1 + R1[2, d] * r2
+                vb[i, d] = R1[0, d] * u0 + R1[1, d] * u1 + R1[2, d] * u2
+                ab[i, d] = R1[0, d] * g0 + R1[1, d] * g1 + R1[2, d] * g2

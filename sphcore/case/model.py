@@ -7,6 +7,7 @@ A case is data: TOML is parsed, never executed. Every problem raises
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,7 +26,7 @@ from sphcore.case.walls import parse_walls
 from sphcore.errors import CaseError
 from sphcore.geometry.faces import Faces
 from sphcore.geometry.motion import MovingGroup
-from sphcore.geometry.planes import Planes, recession_direction
+from sphcore.geometry.planes import Planes, outline, recession_direction
 
 CASE_FILE = "case.toml"
 
@@ -245,9 +246,9 @@ def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
     if cfg["checks"]["rho_min"] >= cfg["checks"]["rho_max"]:
         raise CaseError(file, "checks.rho_max", "expected a value above checks.rho_min")
     faces, ranges = parse_walls(file, cfg["domain"]["walls"], dim, Path(file).parent)
-    moving = _moving_groups(file, cfg, dim, ranges)
     tank = any(sign < 0 for _, _, sign in faces.groups)
     planes = _planes(file, cfg, dim, bounded_by_walls=tank)
+    moving = _moving_groups(file, cfg, dim, ranges, faces, planes)
     blocks = _blocks(file, cfg, dim)
     restart_keys = frozenset(f"{table}.{key}" for table, schema in plugin_schemas.items()
                              for key, opt in schema.items() if opt.restart)
@@ -255,20 +256,33 @@ def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
                 faces=faces, restart_keys=restart_keys, moving=moving)
 
 
-def _moving_groups(file, cfg, dim, ranges) -> tuple[MovingGroup, ...]:
+def _moving_groups(file, cfg, dim, ranges, faces, planes) -> tuple[MovingGroup, ...]:
     """The wall groups with a prescribed motion: the tank (its planes and the walls with
     tank = true) and each wall with a motion of its own; fixed walls are in none."""
     t_end, case_dir, walls = cfg["time"]["t_end"], Path(file).parent, cfg["domain"]["walls"]
     groups = []
+
+    def reach(motion, with_planes, face_index):
+        """The group's largest distance from its centre of rotation (inf: unbounded planes)."""
+        centre = motion.pose(0.0).centre
+        points = [faces.verts[face_index].reshape(-1, dim)] if len(face_index) else []
+        if with_planes:
+            box = outline(planes)
+            if box is None:
+                return math.inf
+            points.append(box.reshape(-1, dim))
+        return float(np.sqrt(((np.concatenate(points) - centre) ** 2).sum(axis=1).max())) if points else 0.0
+
     tank = parse_motion(file, "domain.motion", cfg["domain"]["motion"], dim, case_dir, t_end)
     if tank is not None:
-        faces = [np.arange(*ranges[k]) for k, w in enumerate(walls) if w.get("tank", False)]
-        groups.append(MovingGroup("domain.motion", tank, True,
-                                  np.concatenate(faces).astype(np.int64) if faces else np.zeros(0, np.int64)))
+        idx = [np.arange(*ranges[k]) for k, w in enumerate(walls) if w.get("tank", False)]
+        idx = np.concatenate(idx).astype(np.int64) if idx else np.zeros(0, np.int64)
+        groups.append(MovingGroup("domain.motion", tank, True, idx, reach(tank, True, idx)))
     for k, w in enumerate(walls):
         m = parse_motion(file, f"domain.walls[{k}].motion", w.get("motion", []), dim, case_dir, t_end)
         if m is not None:
-            groups.append(MovingGroup(f"domain.walls[{k}].motion", m, False, np.arange(*ranges[k], dtype=np.int64)))
+            idx = np.arange(*ranges[k], dtype=np.int64)
+            groups.append(MovingGroup(f"domain.walls[{k}].motion", m, False, idx, reach(m, False, idx)))
     return tuple(groups)
 
 

@@ -307,6 +307,9 @@ class MovingGroup:
     motion: Motion
     planes: bool
     faces: np.ndarray
+    #: the largest distance (m) of a point of the group's walls from its centre of rotation
+    #: (inf: unbounded planes); |Omega| reach bounds the rotation's share of the walls' speed
+    reach: float = math.inf
 
 
 def moved_planes(planes, pose: Pose):
@@ -316,13 +319,18 @@ def moved_planes(planes, pose: Pose):
 
 
 def wall_speed(groups, t: float, pos: np.ndarray) -> float:
-    """An upper bound of the speed (m/s) of every moving wall where the particles ``pos``
-    are: |D'| + |Omega| max |x - c - D| over the groups (the time step's limit counts the
-    walls' speed as it counts the particles')."""
+    """An upper bound of the speed (m/s) of every point of the moving walls:
+    |D'| + |Omega| reach over the groups, reach the walls' largest distance from the centre
+    of rotation (a rigid motion keeps it), or for unbounded planes the particles' ``pos``
+    (the time step's limit counts the walls' speed as it counts the particles')."""
     fastest = 0.0
     for g in groups:
         pose = g.motion.pose(t)
         w = float(np.linalg.norm(pose.omega))
-        reach = float(np.sqrt(((pos - pose.centre - pose.shift) ** 2).sum(axis=1).max())) if w and len(pos) else 0.0
+        reach = 0.0
+        if w:
+            reach = g.reach  # the walls' own extent; unbounded planes: where the particles are
+            if not math.isfinite(reach):
+                reach = float(np.sqrt(((pos - pose.centre - pose.shift) ** 2).sum(axis=1).max())) if len(pos) else 0.0
         fastest = max(fastest, float(np.linalg.norm(pose.velocity)) + w * reach)
     return fastest
