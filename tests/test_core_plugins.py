@@ -22,6 +22,7 @@ from sphcore.errors import CaseError
 from sphcore.plugin import pluginhost
 from sphcore.plugin.pluginhost import PluginLoadError
 from sphcore.run import runner
+from sphcore.testing import case_with
 
 GOOD_PLUGIN = '''
 """A throwaway sphcore plugin, written by the test suite."""
@@ -109,37 +110,16 @@ class Broken:
 ''', "sph_configure"),
 }
 
-FREE_CASE = """
-[case]
-dim = 2
-
-[domain]
-min = [-10.0, -10.0]
-max = [10.0, 10.0]
-
-[[blocks]]
-min = [0.0, 0.0]
-count = [3, 2]
-kind = "sphere"
-velocity = [0.25, -0.5]
-
-[particles]
-dx = 0.1
-
-[physics]
-sph = false
-gravity = [0.0, 0.0]
-
-[time]
-t_end = 0.5
-dt = 0.01
-
-[plugins]
-use = ["throwaway"]
-
-[throwaway]
-accel = [1.5, -2.0]
-"""
+FREE_CASE = {
+    "case": {"dim": 2},
+    "domain": {"min": [-10.0, -10.0], "max": [10.0, 10.0]},
+    "blocks": [{"min": [0.0, 0.0], "count": [3, 2], "kind": "sphere", "velocity": [0.25, -0.5]}],
+    "particles": {"dx": 0.1},
+    "physics": {"sph": False, "gravity": [0.0, 0.0]},
+    "time": {"t_end": 0.5, "dt": 0.01},
+    "plugins": {"use": ["throwaway"]},
+    "throwaway": {"accel": [1.5, -2.0]},
+}
 
 
 def install(site: Path, module: str, source: str, dist: str, entry_points: str):
@@ -223,7 +203,7 @@ def test_plugin_acceleration_moves_free_particles(throwaway, tmp_path):
 
 def test_unselected_plugin_does_nothing(throwaway, tmp_path):
     """Installed but not in plugins.use: its table is still validated, its hooks never run."""
-    case_dir = write_case(tmp_path / "free", FREE_CASE.replace('use = ["throwaway"]', "use = []"))
+    case_dir = write_case(tmp_path / "free", case_with(FREE_CASE, {"plugins.use": []}))
     sim = make_sim(case_dir)
     while not sim.done():
         sim.advance()
@@ -232,7 +212,7 @@ def test_unselected_plugin_does_nothing(throwaway, tmp_path):
 
 
 def test_unknown_key_in_plugin_table(throwaway, tmp_path, capsys):
-    case_dir = write_case(tmp_path / "free", FREE_CASE.replace("accel = [1.5, -2.0]", "acel = [1.5, -2.0]"))
+    case_dir = write_case(tmp_path / "free", case_with(FREE_CASE, {"throwaway": {"acel": [1.5, -2.0]}}))
     with pytest.raises(CaseError) as info:
         runner.load(case_dir)
     assert Path(info.value.file) == case_dir / "case.toml"
@@ -245,22 +225,21 @@ def test_unknown_key_in_plugin_table(throwaway, tmp_path, capsys):
 
 
 def test_wrong_type_in_plugin_table(throwaway, tmp_path):
-    case_dir = write_case(tmp_path / "free", FREE_CASE.replace("accel = [1.5, -2.0]", 'accel = "up"'))
+    case_dir = write_case(tmp_path / "free", case_with(FREE_CASE, {"throwaway.accel": "up"}))
     with pytest.raises(CaseError) as info:
         runner.load(case_dir)
     assert info.value.key == "throwaway.accel"
 
 
 def test_plugin_table_without_the_plugin_installed(tmp_path):
-    case_dir = write_case(tmp_path / "free", FREE_CASE.replace('use = ["throwaway"]', "use = []"))
+    case_dir = write_case(tmp_path / "free", case_with(FREE_CASE, {"plugins.use": []}))
     with pytest.raises(CaseError) as info:
         runner.load(case_dir)
     assert info.value.key == "throwaway"  # an unknown section, named
 
 
 def test_plugin_listed_twice(throwaway, tmp_path):
-    text = FREE_CASE.replace('use = ["throwaway"]', 'use = ["throwaway", "throwaway"]')
-    case_dir = write_case(tmp_path / "free", text)
+    case_dir = write_case(tmp_path / "free", case_with(FREE_CASE, {"plugins.use": ["throwaway", "throwaway"]}))
     with pytest.raises(CaseError) as info:
         runner.load(case_dir)
     assert info.value.key == "plugins.use" and "twice" in str(info.value)
@@ -274,8 +253,7 @@ def test_each_run_gets_fresh_plugin_instances(throwaway, tmp_path):
 
 
 def test_misspelt_hook_fails_at_start_up(misspelt, tmp_path, capsys):
-    case_dir = write_case(tmp_path / "bad", FREE_CASE.replace('use = ["throwaway"]', 'use = ["throwaway_bad"]')
-                          .replace("[throwaway]\naccel = [1.5, -2.0]\n", ""))
+    case_dir = write_case(tmp_path / "bad", case_with(FREE_CASE, {"plugins.use": ["throwaway_bad"], "throwaway": None}))
     with pytest.raises(PluginLoadError) as info:
         runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert "sph_after_stepp" in str(info.value)
@@ -291,8 +269,7 @@ def test_misspelt_hook_fails_at_start_up(misspelt, tmp_path, capsys):
 
 
 def test_misspelt_plugin_spoils_no_other_run(misspelt, tmp_path):
-    case_dir = write_case(tmp_path / "free", FREE_CASE.replace('use = ["throwaway"]', "use = []")
-                          .replace("[throwaway]\naccel = [1.5, -2.0]\n", ""))
+    case_dir = write_case(tmp_path / "free", case_with(FREE_CASE, {"plugins.use": [], "throwaway": None}))
     summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert summary["status"] == "completed"
 
@@ -312,21 +289,20 @@ def test_broken_third_party_plugin_is_one_line_and_its_own_fault(site, tmp_path,
     source, says = BROKEN[variant]
     install(site, "throwaway_broken", source, "throwaway-broken", "[sphcore]\nbroken = throwaway_broken:Broken\n")
     pluginhost.refresh()
-    free = FREE_CASE.replace("[throwaway]\naccel = [1.5, -2.0]\n", "")
-    case_dir = write_case(tmp_path / "uses", free.replace('use = ["throwaway"]', 'use = ["broken"]'))
+    free = case_with(FREE_CASE, {"throwaway": None})
+    case_dir = write_case(tmp_path / "uses", case_with(free, {"plugins.use": ["broken"]}))
     assert cli.main(["run", str(case_dir)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1, err
     assert "'broken'" in err and "throwaway-broken" in err and says in err, err
     assert not (case_dir / "output").exists()
     assert cli.main(["check", str(case_dir)]) == 2
-    other = write_case(tmp_path / "other", free.replace('use = ["throwaway"]', "use = []"))
+    other = write_case(tmp_path / "other", case_with(free, {"plugins.use": []}))
     assert cli.main(["run", str(other), "--output", str(tmp_path / "other_out")]) == 0
 
 
 def test_summary_of_a_crashed_run_does_not_say_completed(throwaway, tmp_path):
-    text = FREE_CASE.replace("accel = [1.5, -2.0]", "accel = [1.5, -2.0]\nfail_at_step = 3")
-    case_dir = write_case(tmp_path / "free", text)
+    case_dir = write_case(tmp_path / "free", case_with(FREE_CASE, {"throwaway.fail_at_step": 3}))
     with pytest.raises(RuntimeError, match="on purpose"):
         runner.run(case_dir, output=tmp_path / "out", quiet=True)
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
@@ -399,11 +375,11 @@ def test_a_wall_model_plugin_completes_the_pair_sums_with_its_own_function(wall_
     adds 2.5 share_i to the x acceleration moves every particle's acceleration by exactly
     2.5 m/s^2 (the pair sums and gravity unchanged); a plugin with wall terms and no
     completion, or two different completions, is refused before the run starts."""
-    from sphcore.testing import TINY_CASE
+    from sphcore.testing import tiny_case
 
     acc = {}
     for use in (["reflective"], ["reflective", "throwaway_wall"]):
-        case_dir = write_case(tmp_path / "_".join(use), TINY_CASE.replace("use = []", f"use = {json.dumps(use)}"))
+        case_dir = write_case(tmp_path / "_".join(use), case_with(tiny_case(), {"plugins.use": use}))
         sim = make_sim(case_dir)
         a, drho = np.zeros((sim.state.n, 2)), np.zeros(sim.state.n)
         sim.forces.evaluate(a, drho)  # the rates of the initial particles
@@ -411,7 +387,7 @@ def test_a_wall_model_plugin_completes_the_pair_sums_with_its_own_function(wall_
     np.testing.assert_allclose(acc[2][:, 0] - acc[1][:, 0], 2.5, rtol=0, atol=1e-9)
     np.testing.assert_array_equal(acc[2][:, 1], acc[1][:, 1])
     for use, said in ((["throwaway_halfwall"], "supply none"), (["throwaway_wall", "wall_integral"], "push")):
-        case_dir = write_case(tmp_path / "_".join(use), TINY_CASE.replace("use = []", f"use = {json.dumps(use)}"))
+        case_dir = write_case(tmp_path / "_".join(use), case_with(tiny_case(), {"plugins.use": use}))
         with pytest.raises(CaseError, match="sph_wall_completion") as err:
             make_sim(case_dir)
         assert said in str(err.value)

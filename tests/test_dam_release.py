@@ -109,37 +109,18 @@ def test_fit_and_series_refuse_what_they_cannot_answer(rel):
         rel.surface_acceleration(2.0)
 
 
-RESERVOIR = """
-[case]
-dim = 2
-
-[domain]
-min = [0.0, 0.0]
-max = [1.445, 0.4]
-
-[[blocks]]
-min = [1.0, 0.0]
-max = [1.445, 0.2]      # H = 0.2 m, L = 0.445 m = 89 dx: about the SPHERIC reservoir's L / H
-
-[particles]
-dx = 0.005
-
-[eos]
-c0_factor = 20.0
-
-[viscosity]
-alpha = 0.1
-
-[density_diffusion]
-delta = 0.1
-hydrostatic = true
-
-[time]
-t_end = 1.0
-
-[plugins]
-use = ["reflective", "wall_integral"]
-"""
+RESERVOIR = {
+    "case": {"dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [1.445, 0.4]},
+    # H = 0.2 m, L = 0.445 m = 89 dx: about the SPHERIC reservoir's L / H
+    "blocks": [{"min": [1.0, 0.0], "max": [1.445, 0.2]}],
+    "particles": {"dx": 0.005},
+    "eos": {"c0_factor": 20.0},
+    "viscosity": {"alpha": 0.1},
+    "density_diffusion": {"delta": 0.1, "hydrostatic": True},
+    "time": {"t_end": 1.0},
+    "plugins": {"use": ["reflective", "wall_integral"]},
+}
 
 
 def test_released_column_starts_as_the_incompressible_theory(tmp_path, rel):

@@ -25,35 +25,23 @@ from conftest import by_id, make_sim, write_case
 
 from sphcore.plugin import pluginhost
 from sphcore.run import runner
+from sphcore.testing import case_with
 
 DX, NX, NY = 0.01, 20, 20
 W, H = NX * DX, NY * DX  # tank width, water depth (m)
 G = 9.81
 SETTLE_S, FREE_S = 0.2, 1.0  # dynamic relaxation, then the measured free run (s)
 
-TANK = """
-[case]
-dim = 2
-[domain]
-min = [0.0, 0.0]
-max = [{W}, {top}]
-[[blocks]]
-min = [0.0, 0.0]
-count = [{NX}, {NY}]
-[particles]
-dx = {DX}
-[kernel]
-name = "wendland_c2"
-h_over_dx = 1.5
-[viscosity]
-alpha = 0.1
-[integrator]
-scheme = "leapfrog"
-[time]
-t_end = 10.0
-[plugins]
-use = {plugins}
-"""
+TANK = {
+    "case": {"dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [W, 2 * H]},
+    "blocks": [{"min": [0.0, 0.0], "count": [NX, NY]}],
+    "particles": {"dx": DX},
+    "kernel": {"name": "wendland_c2", "h_over_dx": 1.5},
+    "viscosity": {"alpha": 0.1},
+    "integrator": {"scheme": "leapfrog"},
+    "time": {"t_end": 10.0},
+}
 
 MODES = [("ghost",), ("ghost", "reflective")]
 
@@ -69,8 +57,7 @@ def need(mode):
 
 
 def tank_case(directory, plugins, top=2 * H):
-    text = TANK.format(W=W, top=top, NX=NX, NY=NY, DX=DX, plugins=str(list(plugins)).replace("'", '"'))
-    return write_case(directory, text)
+    return write_case(directory, case_with(TANK, {"domain.max": [W, top], "plugins.use": list(plugins)}))
 
 
 def pressure_error(sim):
@@ -188,28 +175,17 @@ def test_modified_pressure_with_ghosts_is_exactly_at_rest(tmp_path):
 # a symmetric collapse: a column in the middle of a wider tank spreads both ways
 # ----------------------------------------------------------------------------------------
 
-COLUMN = """
-[case]
-dim = 2
-[domain]
-min = [-0.2, 0.0]
-max = [0.2, 0.3]
-[[blocks]]
-min = [-0.05, 0.0]
-count = [10, 20]
-[particles]
-dx = 0.01
-[kernel]
-h_over_dx = 1.5
-[time]
-t_end = {t_end}
-[plugins]
-use = {plugins}
-"""
+COLUMN = {
+    "case": {"dim": 2},
+    "domain": {"min": [-0.2, 0.0], "max": [0.2, 0.3]},
+    "blocks": [{"min": [-0.05, 0.0], "count": [10, 20]}],
+    "particles": {"dx": 0.01},
+    "kernel": {"h_over_dx": 1.5},
+}
 
 
 def column(tmp_path, plugins, t_end):
-    sim = make_sim(write_case(tmp_path, COLUMN.format(t_end=t_end, plugins=str(list(plugins)).replace("'", '"'))))
+    sim = make_sim(write_case(tmp_path, case_with(COLUMN, {"time.t_end": t_end, "plugins.use": list(plugins)})))
     st = sim.state
     ix, iy = st.id // 20, st.id % 20
     partner = (9 - ix) * 20 + iy

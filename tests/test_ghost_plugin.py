@@ -11,31 +11,23 @@ from sphcore.errors import CaseError
 from sphcore.physics.kernels import SUPPORT
 from sphcore.plugin import pluginhost
 from sphcore.run import runner
+from sphcore.testing import case_with
 from sphcore_plugins.ghost import GhostPlugin
 
-BOX = """
-[case]
-dim = {dim}
-[domain]
-min = {lo}
-max = {hi}
-[[blocks]]
-min = {lo}
-count = {count}
-[particles]
-dx = 0.02
-[time]
-t_end = 0.01
-[plugins]
-use = ["ghost"]
-{extra}
-"""
 
-
-def box_case(tmp_path, dim=2, extra="", n=6):
+def box_case(tmp_path, dim=2, extra=None, n=6):
+    """A box n dx wide and 2 n dx high, its lower half water; ``extra``: changes (case_with)."""
     lo = [0.0] * dim
     hi = [n * 0.02] * (dim - 1) + [2 * n * 0.02]
-    return write_case(tmp_path, BOX.format(dim=dim, lo=lo, hi=hi, count=[n] * dim, extra=extra))
+    case = {
+        "case": {"dim": dim},
+        "domain": {"min": lo, "max": hi},
+        "blocks": [{"min": lo, "count": [n] * dim}],
+        "particles": {"dx": 0.02},
+        "time": {"t_end": 0.01},
+        "plugins": {"use": ["ghost"]},
+    }
+    return write_case(tmp_path, case_with(case, extra or {}))
 
 
 def test_entry_point_and_options_are_declared():
@@ -48,10 +40,10 @@ def test_entry_point_and_options_are_declared():
 
 
 @pytest.mark.parametrize("extra, key", [
-    ('[ghost]\nwall = "sticky"', "ghost.wall"),
-    ("[ghost]\nhydrostatic = 1", "ghost.hydrostatic"),
-    ("[ghost]\nlayers = 3", "ghost.layers"),
-    ("[physics]\nsph = false", "plugins.use"),
+    ({"ghost.wall": "sticky"}, "ghost.wall"),
+    ({"ghost.hydrostatic": 1}, "ghost.hydrostatic"),
+    ({"ghost.layers": 3}, "ghost.layers"),
+    ({"physics.sph": False}, "plugins.use"),
 ])
 def test_bad_options_name_the_key(tmp_path, extra, key):
     with pytest.raises(CaseError) as e:
@@ -60,7 +52,7 @@ def test_bad_options_name_the_key(tmp_path, extra, key):
 
 
 def test_sources_follow_the_current_particle_order(tmp_path):
-    sim = make_sim(box_case(tmp_path, extra='[ghost]\nwall = "no_slip"'))
+    sim = make_sim(box_case(tmp_path, extra={"ghost.wall": "no_slip"}))
     sim.state.vel[:] = np.random.default_rng(0).normal(size=sim.state.vel.shape)
     plugin = sim.pm.get_plugin("ghost")
     sim.state.permute(np.random.default_rng(1).permutation(sim.state.n))  # as a reorder does
@@ -99,7 +91,7 @@ def test_summary_reports_ghost_counts(tmp_path):
 def test_switching_wall_treatment_is_one_line(tmp_path):
     # the same case with use = ["ghost"], ["reflective"] and both validates unchanged:
     # the [ghost] table is accepted (and ignored) when ghost is not selected
-    case_dir = box_case(tmp_path / "sw", extra='[ghost]\nwall = "no_slip"')
+    case_dir = box_case(tmp_path / "sw", extra={"ghost.wall": "no_slip"})
     for use in (["ghost"], ["reflective"], ["ghost", "reflective"]):
         info = pluginhost.available().get("reflective")
         if "reflective" in use and (info is None or info.cls is None):

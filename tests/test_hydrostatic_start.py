@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from sphcore.physics import eos
 from sphcore.run import runner
 from sphcore.run.build import build
-from sphcore.testing import write_case
+from sphcore.testing import case_with, write_case
 
 
 @settings(max_examples=60, deadline=None)
@@ -46,27 +46,17 @@ def test_hydrostatic_pressure_limits():
     assert np.isnan(eos.hydrostatic_pressure(np.array([10.0]), 1000.0, 2.0, 0.5, 9.81)[0])
 
 
-TANK = """
-[case]
-dim = 2
-[domain]
-min = [0.0, 0.0]
-max = [0.6, 0.7]
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.6, 0.6]
-[particles]
-dx = 0.02
-[kernel]
-h_over_dx = {h}
-[density_diffusion]
-delta = 0.1
-hydrostatic = true
-[time]
-t_end = 0.01
-[plugins]
-use = ["reflective", "wall_integral"]
-"""
+def tank(h_over_dx: float) -> dict:
+    return {
+        "case": {"dim": 2},
+        "domain": {"min": [0.0, 0.0], "max": [0.6, 0.7]},
+        "blocks": [{"min": [0.0, 0.0], "max": [0.6, 0.6]}],
+        "particles": {"dx": 0.02},
+        "kernel": {"h_over_dx": h_over_dx},
+        "density_diffusion": {"delta": 0.1, "hydrostatic": True},
+        "time": {"t_end": 0.01},
+        "plugins": {"use": ["reflective", "wall_integral"]},
+    }
 
 
 @pytest.mark.parametrize("h_over_dx", [1.3, 1.5, 2.0])
@@ -77,7 +67,7 @@ def test_a_tank_at_rest_starts_in_the_discrete_equilibrium(tmp_path, h_over_dx):
     interpolation in the wall distances), and none is pushed sideways by more than 5e-5 g. With the start
     used until 2026-11-24 the deep rows drifted by up to 0.014 g and the wall columns
     differed by 0.004 g (docs/wall_pressure.md)."""
-    case, pm = runner.load(write_case(tmp_path / "tank", TANK.format(h=h_over_dx)))
+    case, pm = runner.load(write_case(tmp_path / "tank", tank(h_over_dx)))
     sim = build(case, pm)
     sim.integrator.rates()
     st_, prm = sim.ctx.state, sim.ctx.params
@@ -98,9 +88,8 @@ def test_a_column_the_eos_cannot_hold_at_rest_is_refused_and_nothing_is_written(
     one line naming the file and eos.gamma, no output directory."""
     from sphcore import cli
 
-    text = TANK.format(h=1.3).replace("max = [0.6, 0.6]", "max = [0.6, 1.0]").replace(
-        "max = [0.6, 0.7]", "max = [0.6, 1.2]") + "\n[eos]\nc0 = 2.0\ngamma = 0.5\n"
-    case_dir = write_case(tmp_path / "deep", text)
+    case = case_with(tank(1.3), {"blocks[0].max": [0.6, 1.0], "domain.max": [0.6, 1.2], "eos": {"c0": 2.0, "gamma": 0.5}})
+    case_dir = write_case(tmp_path / "deep", case)
     assert cli.main(["run", str(case_dir), "--output", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert "eos.gamma" in err and "case.toml" in err and "Traceback" not in err

@@ -12,27 +12,14 @@ from conftest import make_sim, write_case
 
 from sphcore.jit.parallel import on_threads_by_size
 
-TANK = """
-[case]
-dim = 2
-
-[domain]
-min = [0.0, 0.0]
-max = [1.3, 1.3]
-
-[[blocks]]
-min = [0.0, 0.0]
-count = [64, 64]
-
-[particles]
-dx = 0.02
-
-[time]
-t_end = 1.0
-
-[plugins]
-use = ["reflective", "wall_integral"]
-"""
+TANK = {
+    "case": {"dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [1.3, 1.3]},
+    "blocks": [{"min": [0.0, 0.0], "count": [64, 64]}],
+    "particles": {"dx": 0.02},
+    "time": {"t_end": 1.0},
+    "plugins": {"use": ["reflective", "wall_integral"]},
+}
 
 
 def _threads_seen(seen):

@@ -12,33 +12,14 @@ import numpy as np
 import pytest
 
 from sphcore.plugin import pluginhost
-from sphcore.testing import run_case
+from sphcore.testing import case_with, run_case, tiny_case
 
 TEMPLATE = Path(__file__).resolve().parents[1] / "examples" / "plugin_template"
 MODULE = TEMPLATE / "sph_energy_log" / "__init__.py"
 
 # a 0.1 m x 0.2 m column released in a 0.5 m tank: kinetic energy rises from zero
-COLUMN = """
-[case]
-dim = 2
-
-[domain]
-min = [0.0, 0.0]
-max = [0.5, 0.3]
-
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.1, 0.2]
-
-[particles]
-dx = 0.01
-
-[time]
-t_end = 0.05
-
-[plugins]
-use = []
-"""
+COLUMN = case_with(tiny_case(), {"domain.max": [0.5, 0.3], "blocks[0].max": [0.1, 0.2], "particles.dx": 0.01,
+                                  "time.t_end": 0.05})
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sphcore.testing import run_case
+from sphcore.testing import case_with, run_case
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTS = ROOT / "postprocessing"
@@ -22,39 +22,25 @@ TOOLKIT = ["wavefront.py", "pressure_profile.py", "probes.py", "spheric_test2.py
 STUDIES = sorted(p.relative_to(ROOT) for p in (ROOT / "validation").rglob("*.py"))
 RHO_G = 1000.0 * 9.81
 
-TANK = """
-[case]
-dim = 2
-[domain]
-min = [0.0, 0.0]
-max = [0.2, 0.3]
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.2, 0.2]
-[particles]
-dx = 0.02
-[time]
-t_end = 0.004
-[physics]
-modified_pressure = true
-[plugins]
-use = []
-"""
+TANK = {
+    "case": {"dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [0.2, 0.3]},
+    "blocks": [{"min": [0.0, 0.0], "max": [0.2, 0.2]}],
+    "particles": {"dx": 0.02},
+    "time": {"t_end": 0.004},
+    "physics": {"modified_pressure": True},
+    "plugins": {"use": []},
+}
 
-COLUMN = TANK.replace("max = [0.2, 0.2]", "max = [0.06, 0.12]").replace("modified_pressure = true", "")
+COLUMN = case_with(TANK, {"blocks[0].max": [0.06, 0.12], "physics.modified_pressure": None})
 
 # a tank 0.3 m deep at rest (modified pressure: exactly hydrostatic), a pressure probe on the
 # floor and a depth probe: named like SPHERIC test 2's, so every probe script reads it
-PROBED = TANK.replace("max = [0.2, 0.3]", "max = [0.2, 0.4]").replace("max = [0.2, 0.2]", "max = [0.2, 0.3]") + """
-[probes]
-every_dt = 0.001
-[[probes.pressure]]
-name = "P1"
-point = [0.1, 0.0]
-[[probes.depth]]
-name = "H2"
-point = [0.1, 0.0]
-"""
+PROBED = case_with(TANK, {"domain.max": [0.2, 0.4], "blocks[0].max": [0.2, 0.3], "probes": {
+    "every_dt": 0.001,
+    "pressure": [{"name": "P1", "point": [0.1, 0.0]}],
+    "depth": [{"name": "H2", "point": [0.1, 0.0]}],
+}})
 
 # what each script needs besides the path it reads
 EXTRA = {"peer_series.py": ["--reference", "buchner_2002_P1", "--H", "0.3"]}
@@ -63,10 +49,10 @@ EXTRA = {"peer_series.py": ["--reference", "buchner_2002_P1", "--H", "0.3"]}
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     root = tmp_path_factory.mktemp("runs")
-    for name, text, plugins in (("tank", TANK, ["reflective", "netcdf"]),
+    for name, case, plugins in (("tank", TANK, ["reflective", "netcdf"]),
                                 ("column", COLUMN, ["reflective", "netcdf", "vtu"]),
                                 ("probed", PROBED, ["reflective", "probes"])):
-        s = run_case(root / name, text, plugins=plugins)
+        s = run_case(root / name, case, plugins=plugins)
         assert s["status"] == "completed", s["message"]
     return root
 

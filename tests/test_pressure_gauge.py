@@ -7,37 +7,27 @@ import numpy as np
 import pytest
 
 from sphcore.physics import eos
-from sphcore.testing import run_case
+from sphcore.testing import case_with, run_case
 
-TANK = """
-[case]
-dim = 2
-[domain]
-min = [0.0, 0.0]
-max = [0.2, 0.3]
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.2, 0.2]
-[particles]
-dx = 0.01
-{radius}
-[physics]
-modified_pressure = false
-[time]
-t_end = 1e-9
-[plugins]
-use = ["reflective", "pressure_gauge"]
-"""
+TANK = {
+    "case": {"dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [0.2, 0.3]},
+    "blocks": [{"min": [0.0, 0.0], "max": [0.2, 0.2]}],
+    "particles": {"dx": 0.01},
+    "physics": {"modified_pressure": False},
+    "time": {"t_end": 1e-9},
+    "plugins": {"use": ["reflective", "pressure_gauge"]},
+}
 
 
-@pytest.mark.parametrize("radius", ["", "radius = 0.003", "radius = 0.005"])
+@pytest.mark.parametrize("radius", [None, 0.003, 0.005])
 def test_gauge_reads_the_initial_hydrostatic_tank_as_exact(tmp_path, radius):
     """At t = 0 the particles carry the exact hydrostatic pressure of the Tait fluid
     (sphcore.physics.eos.hydrostatic_pressure): the gauge, which compares with the incompressible
     rho0 g (H - y), reads the compressibility's excess p(d) / (rho0 g d) - 1 at the deepest
     layer (d = H - dx/2; 0.24 % in this 0.2 m tank at c0 = 10 sqrt(2 g H)), to round-off,
     and nothing has moved, for any contact radius."""
-    s = run_case(tmp_path, TANK.format(radius=radius))
+    s = run_case(tmp_path, case_with(TANK, {"particles.radius": radius}))
     g = s["pressure_gauge"]
     assert s["status"] == "completed"
     d = 0.2 - 0.005

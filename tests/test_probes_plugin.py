@@ -16,50 +16,31 @@ from conftest import make_sim, script, write_case, write_cut_netcdf
 from sphcore import cli
 from sphcore.errors import CaseError
 from sphcore.run import runner
+from sphcore.testing import case_with
 
 ROOT = Path(__file__).resolve().parent.parent
 
 # a 0.1 m x 0.1 m column (10 x 10 particles) in a 0.3 m tank: the water reaches the right
 # wall at ~0.1 s; fixed dt = 2^-13 s so that a restart lands on the same steps
-TINY = """
-[case]
-dim = 2
-[domain]
-min = [0.0, 0.0]
-max = [0.3, 0.3]
-[[blocks]]
-min = [0.0, 0.0]
-max = [{width}, 0.1]
-[particles]
-dx = 0.01
-[time]
-t_end = {t_end}
-dt = 0.0001220703125
-[plugins]
-use = {use}
-[front_gauge]
-wall_height = true
-[probes]
-every_dt = {every_dt}
-[[probes.pressure]]
-name = "right"
-start = [0.3, 0.005]
-end = [0.3, 0.015]
-points = 3
-reference = "lobovsky_2014_sensor2"
-H = 0.1
-[[probes.pressure]]
-name = "back"
-point = [0.0, 0.02]
-mode = "particle"
-[[probes.depth]]
-name = "d1"
-point = [0.05, 0.0]
-"""
-
-
-def tiny(tmp_path, name="tiny", t_end=0.15, every_dt=0.002, width=0.1, use='["reflective", "probes"]'):
-    return write_case(tmp_path / name, TINY.format(t_end=t_end, every_dt=every_dt, width=width, use=use))
+def tiny(tmp_path, name="tiny", t_end=0.15, every_dt=0.002, width=0.1, use=("reflective", "probes"), changes=None):
+    """The case directory ``tmp_path``/``name``; ``changes``: more changes (case_with)."""
+    case = {
+        "case": {"dim": 2},
+        "domain": {"min": [0.0, 0.0], "max": [0.3, 0.3]},
+        "blocks": [{"min": [0.0, 0.0], "max": [width, 0.1]}],
+        "particles": {"dx": 0.01},
+        "time": {"t_end": t_end, "dt": 0.0001220703125},
+        "plugins": {"use": list(use)},
+        "front_gauge": {"wall_height": True},
+        "probes": {
+            "every_dt": every_dt,
+            "pressure": [{"name": "right", "start": [0.3, 0.005], "end": [0.3, 0.015], "points": 3,
+                          "reference": "lobovsky_2014_sensor2", "H": 0.1},
+                         {"name": "back", "point": [0.0, 0.02], "mode": "particle"}],
+            "depth": [{"name": "d1", "point": [0.05, 0.0]}],
+        },
+    }
+    return write_case(tmp_path / name, case_with(case, changes or {}))
 
 
 # ---------------------------------------------------------------------------- options
@@ -118,7 +99,7 @@ def test_sph_run_with_a_bad_probe_prints_one_line_and_exits_2(tmp_path, capsys):
 def tiny_run(tmp_path_factory):
     """0.25 s of the tiny dam break with probes every 2 ms (and the front gauge's wall height)."""
     tmp = tmp_path_factory.mktemp("probes")
-    case_dir = tiny(tmp, t_end=0.25, use='["reflective", "probes", "front_gauge"]')
+    case_dir = tiny(tmp, t_end=0.25, use=["reflective", "probes", "front_gauge"])
     summary = runner.run(case_dir, output=tmp / "out", quiet=True)
     return tmp / "out", summary
 
@@ -274,9 +255,8 @@ def test_postprocessing_on_a_bad_path_prints_one_line_and_exits_2(tmp_path, caps
 
 
 def _front(tmp_path, width, reference, name="f"):
-    case_dir = tiny(tmp_path, name=name, width=width, use='["front_gauge"]')
-    text = (case_dir / "case.toml").read_text().replace("wall_height = true", f'reference = "{reference}"')
-    (case_dir / "case.toml").write_text(text.replace("max = [0.3, 0.3]", "max = [0.3, 0.5]"))
+    case_dir = tiny(tmp_path, name=name, width=width, use=["front_gauge"],
+                    changes={"front_gauge": {"reference": reference}, "domain.max": [0.3, 0.5]})
     return runner.load(case_dir)[1].get_plugin("front_gauge")
 
 

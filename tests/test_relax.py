@@ -20,31 +20,20 @@ from sphcore import cli
 from sphcore.run import relax, runner
 from sphcore.run.build import build
 from sphcore.run.simulation import Simulation
-from sphcore.testing import write_case
+from sphcore.testing import case_with, write_case
 
 # cases/hydrostatic_tank cut to 20 x 20 particles, plain Tait pressure, h = 1.5 dx
-TANK = """
-[case]
-dim = 2
-[domain]
-min = [0.0, 0.0]
-max = [0.4, 0.6]
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.4, 0.4]
-[particles]
-dx = 0.02
-[fluid]
-nu = 1.0e-6
-[kernel]
-h_over_dx = 1.5
-[time]
-t_end = 5.0
-[plugins]
-use = ["reflective", "wall_integral", "pressure_gauge"]
-[reflective]
-cr = 0.0
-"""
+TANK = {
+    "case": {"dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [0.4, 0.6]},
+    "blocks": [{"min": [0.0, 0.0], "max": [0.4, 0.4]}],
+    "particles": {"dx": 0.02},
+    "fluid": {"nu": 1.0e-6},
+    "kernel": {"h_over_dx": 1.5},
+    "time": {"t_end": 5.0},
+    "plugins": {"use": ["reflective", "wall_integral", "pressure_gauge"]},
+    "reflective": {"cr": 0.0},
+}
 
 
 def run_tank(tmp_path, name, *sets):
@@ -114,17 +103,16 @@ def test_a_restart_does_not_relax_again(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("extra, key", [
-    ('[relax]\ntime = 1.0\n', "blocks[0].velocity"),
-    ('[relax]\ntime = -1.0\n', "relax.time"),
-    ('[relax]\ntime = 1.0\ndamping_time = 0.0\n', "relax.damping_time"),
-    ('[relax]\ntime = 1.0\n[physics]\nsph = false\n', "relax.time"),
+    ({"relax.time": 1.0}, "blocks[0].velocity"),
+    ({"relax.time": -1.0}, "relax.time"),
+    ({"relax": {"time": 1.0, "damping_time": 0.0}}, "relax.damping_time"),
+    ({"relax.time": 1.0, "physics.sph": False}, "relax.time"),
 ])
 def test_a_case_the_relaxation_cannot_serve_is_refused_and_nothing_is_written(tmp_path, capsys, extra, key):
     """Exit 2, one line naming the file and the key, no output directory: a block given a
     velocity (the relaxation ends at rest), a negative time, a zero damping time, no SPH."""
-    text = TANK.replace("max = [0.4, 0.4]", "max = [0.4, 0.4]\nvelocity = [0.1, 0.0]" if "velocity" in key
-                        else "max = [0.4, 0.4]") + extra
-    case_dir = write_case(tmp_path / "bad", text)
+    velocity = {"blocks[0].velocity": [0.1, 0.0]} if "velocity" in key else {}
+    case_dir = write_case(tmp_path / "bad", case_with(TANK, {**velocity, **extra}))
     assert cli.main(["run", str(case_dir), "--output", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert key in err and "case.toml" in err and "Traceback" not in err
@@ -134,7 +122,7 @@ def test_a_case_the_relaxation_cannot_serve_is_refused_and_nothing_is_written(tm
 def test_a_relaxation_that_would_take_too_many_steps_is_refused(tmp_path, capsys):
     """time.max_steps bounds the relaxation as it bounds the run: 100 s of relaxation at
     this tank's step is refused after its first step, exit 2, nothing written."""
-    case_dir = write_case(tmp_path / "long", TANK + "[relax]\ntime = 100.0\n")
+    case_dir = write_case(tmp_path / "long", case_with(TANK, {"relax.time": 100.0}))
     code = cli.main(["run", str(case_dir), "--output", str(tmp_path / "out"), "--t-end", "0.001",
                      "--set", "time.max_steps=20000"])
     assert code == 2
@@ -143,7 +131,7 @@ def test_a_relaxation_that_would_take_too_many_steps_is_refused(tmp_path, capsys
     assert not (tmp_path / "out").exists()
 
 
-COLUMN = TANK.replace("max = [0.4, 0.4]", "max = [0.1, 0.3]")
+COLUMN = case_with(TANK, {"blocks[0].max": [0.1, 0.3]})
 
 
 def test_a_column_that_falls_while_relaxing_is_refused(tmp_path, capsys):
@@ -172,7 +160,7 @@ def test_an_unstable_relaxation_is_refused_with_its_reason(tmp_path, capsys, mon
         advance(self)
 
     monkeypatch.setattr(Simulation, "advance", failing)
-    case_dir = write_case(tmp_path / "tank", TANK + "[relax]\ntime = 0.1\n")
+    case_dir = write_case(tmp_path / "tank", case_with(TANK, {"relax.time": 0.1}))
     assert cli.main(["run", str(case_dir), "--output", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert "relax.time" in err and "made up by the test" in err and "case.toml" in err
@@ -187,7 +175,7 @@ def test_sph_check_does_not_relax_and_says_so(tmp_path, capsys, monkeypatch):
         raise AssertionError("sph check relaxed")
 
     monkeypatch.setattr(relax, "settle", must_not_run)
-    case_dir = write_case(tmp_path / "tank", TANK + "[relax]\ntime = 100.0\n")
+    case_dir = write_case(tmp_path / "tank", case_with(TANK, {"relax.time": 100.0}))
     assert cli.main(["check", str(case_dir)]) == 0
     out = capsys.readouterr().out
     assert "ok:" in out and "relax: 100 s of damped motion before t = 0, done by sph run" in out

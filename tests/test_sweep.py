@@ -22,31 +22,15 @@ from sphcore.sweep import command as sweep
 from sphcore.sweep.grid import expand, fold, key_text, parse_key, parse_set, parse_vary, split_values
 from sphcore.sweep.results import grid, pareto_mask
 
-TINY = """
-[case]
-name = "tiny"
-dim = 2
-
-[domain]
-min = [0.0, 0.0]
-max = [0.2, 0.2]
-
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.1, 0.1]
-
-[particles]
-dx = 0.01
-
-[viscosity]
-alpha = 0.1
-
-[time]
-t_end = 0.01
-
-[plugins]
-use = ["reflective"]
-"""
+TINY = {
+    "case": {"name": "tiny", "dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [0.2, 0.2]},
+    "blocks": [{"min": [0.0, 0.0], "max": [0.1, 0.1]}],
+    "particles": {"dx": 0.01},
+    "viscosity": {"alpha": 0.1},
+    "time": {"t_end": 0.01},
+    "plugins": {"use": ["reflective"]},
+}
 
 
 @pytest.fixture

@@ -10,51 +10,33 @@ from conftest import by_id, write_case
 
 from sphcore.run import runner, threads
 from sphcore.run.threads import ThreadTuner, candidates
+from sphcore.testing import case_with
 
 # a 2D dam break of 2,600 particles (above the pair loop's serial limit, PAIRS_PARALLEL_MIN
 # = 1,000: its slabs run in parallel) with the wall model, density diffusion and artificial
 # viscosity; DAM_2D_BIG has 21,000 (above PARALLEL_MIN = 20,000: the element-wise passes,
 # the wall model's and the reflective walls' kernels run their parallel builds too)
-DAM_2D = """
-[case]
-dim = 2
-[domain]
-min = [0.0, 0.0]
-max = [0.8, 0.5]
-[[blocks]]
-min = [0.0, 0.0]
-count = [40, 65]
-[particles]
-dx = 0.005
-[density_diffusion]
-delta = 0.1
-hydrostatic = true
-[time]
-t_end = 0.004
-[plugins]
-use = {plugins}
-"""
+DAM_2D = {
+    "case": {"dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [0.8, 0.5]},
+    "blocks": [{"min": [0.0, 0.0], "count": [40, 65]}],
+    "particles": {"dx": 0.005},
+    "density_diffusion": {"delta": 0.1, "hydrostatic": True},
+    "time": {"t_end": 0.004},
+    "plugins": {"use": []},
+}
 
-DAM_3D = """
-[case]
-dim = 3
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.3, 0.1, 0.2]
-[[blocks]]
-min = [0.0, 0.0, 0.0]
-count = [10, 14, 16]
-[particles]
-dx = 0.007
-[time]
-t_end = 0.003
-[plugins]
-use = {plugins}
-"""
+DAM_3D = {
+    "case": {"dim": 3},
+    "domain": {"min": [0.0, 0.0, 0.0], "max": [0.3, 0.1, 0.2]},
+    "blocks": [{"min": [0.0, 0.0, 0.0], "count": [10, 14, 16]}],
+    "particles": {"dx": 0.007},
+    "time": {"t_end": 0.003},
+    "plugins": {"use": []},
+}
 
 
-DAM_2D_BIG = (DAM_2D.replace("max = [0.8, 0.5]", "max = [1.5, 1.0]").replace("count = [40, 65]", "count = [150, 140]")
-              .replace("t_end = 0.004", "t_end = 0.0004"))
+DAM_2D_BIG = case_with(DAM_2D, {"domain.max": [1.5, 1.0], "blocks[0].count": [150, 140], "time.t_end": 0.0004})
 
 
 class Alternate(ThreadTuner):
@@ -70,17 +52,17 @@ class Alternate(ThreadTuner):
         return self.current
 
 
-@pytest.mark.parametrize("text, plugins", [
+@pytest.mark.parametrize("case, plugins", [
     (DAM_2D, ["reflective", "wall_integral"]),
     (DAM_2D, ["ghost", "reflective"]),
     (DAM_3D, ["reflective", "wall_integral"]),
     (DAM_2D_BIG, ["reflective", "wall_integral"]),
 ])
-def test_changing_the_thread_count_between_steps_keeps_the_bits(tmp_path, monkeypatch, text, plugins):
+def test_changing_the_thread_count_between_steps_keeps_the_bits(tmp_path, monkeypatch, case, plugins):
     most = numba.config.NUMBA_NUM_THREADS
     if most < 2:
         pytest.skip("numba is limited to one thread here (NUMBA_NUM_THREADS)")
-    case_dir = write_case(tmp_path / "case", text.format(plugins=str(plugins).replace("'", '"')))
+    case_dir = write_case(tmp_path / "case", case_with(case, {"plugins.use": plugins}))
     one = runner.run(case_dir, output=tmp_path / "one", overrides=["parallel.threads=1"], quiet=True)
     monkeypatch.setattr(threads, "tuner_for", lambda config: Alternate(most))
     both = runner.run(case_dir, output=tmp_path / "both", quiet=True)
@@ -146,7 +128,7 @@ def test_one_thread_or_no_adaptation_never_changes_the_count():
 
 
 def test_parallel_threads_is_a_case_option(tmp_path):
-    case_dir = write_case(tmp_path / "case", DAM_2D.format(plugins='["reflective"]').replace("0.004", "0.0005"))
+    case_dir = write_case(tmp_path / "case", case_with(DAM_2D, {"plugins.use": ["reflective"], "time.t_end": 0.0005}))
     summary = runner.run(case_dir, output=tmp_path / "out", overrides=["parallel.threads=1"], quiet=True)
     assert summary["threads"]["counts"] == [1] and not summary["threads"]["adaptive"]
     assert summary["threads"]["steps_per_count"] == {"1": summary["steps"]}
@@ -165,8 +147,8 @@ def test_a_restart_may_change_the_thread_settings_and_keeps_the_bits(tmp_path):
     """parallel.threads and parallel.adapt may differ on --restart (resume.MAY_DIFFER): the
     result is the same bits for any thread count."""
     dt = 2.0**-15
-    text = DAM_2D.format(plugins='["reflective", "wall_integral"]').replace("t_end = 0.004", f"t_end = {40 * dt!r}\ndt = {dt!r}")
-    case_dir = write_case(tmp_path / "case", text)
+    case = case_with(DAM_2D, {"plugins.use": ["reflective", "wall_integral"], "time.t_end": 40 * dt, "time.dt": dt})
+    case_dir = write_case(tmp_path / "case", case)
     full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
     part = runner.run(case_dir, output=tmp_path / "part", t_end=15 * dt, quiet=True)
     rest = runner.run(case_dir, output=tmp_path / "part", restart=True, quiet=True,
