@@ -9,55 +9,33 @@ import numpy as np
 import pytest
 
 from sphcore.api import build_grid
-from sphcore.testing import context
+from sphcore.testing import case_with, context
 from sphcore_plugins.wall_integral.facetable import build_table, table_wall_terms
 from sphcore_plugins.wall_integral.facewalls import face_wall_terms, point_terms, stamps_for
 
-SQUARE_2D = """
-[case]
-dim = 2
-[[domain.walls]]
-shape = "polygon"
-fluid = "inside"
-points = [[0, 0], [1, 0], [1, 1], [0, 1]]
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.5, 0.3]
-[particles]
-dx = 0.02
-[time]
-t_end = 0.01
-[plugins]
-use = ["reflective", "wall_integral"]
-"""
+SQUARE_2D = {
+    "case": {"dim": 2},
+    "domain": {"walls": [{"shape": "polygon", "fluid": "inside", "points": [[0, 0], [1, 0], [1, 1], [0, 1]]}]},
+    "blocks": [{"min": [0.0, 0.0], "max": [0.5, 0.3]}],
+    "particles": {"dx": 0.02},
+    "time": {"t_end": 0.01},
+    "plugins": {"use": ["reflective", "wall_integral"]},
+}
 
-BOX_3D = """
-[case]
-dim = 3
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.6, 0.4, 0.4]
-[[domain.walls]]
-shape = "box"
-min = [0.3, 0.1, 0.0]
-max = [0.4, 0.3, 0.1]
-fluid = "outside"
-[[blocks]]
-min = [0.0, 0.0, 0.0]
-max = [0.2, 0.4, 0.2]
-[particles]
-dx = 0.02
-[physics]
-gravity = [0.0, 0.0, -9.81]
-[time]
-t_end = 0.01
-[plugins]
-use = ["reflective", "wall_integral"]
-"""
+BOX_3D = {
+    "case": {"dim": 3},
+    "domain": {"min": [0.0, 0.0, 0.0], "max": [0.6, 0.4, 0.4],
+               "walls": [{"shape": "box", "min": [0.3, 0.1, 0.0], "max": [0.4, 0.3, 0.1], "fluid": "outside"}]},
+    "blocks": [{"min": [0.0, 0.0, 0.0], "max": [0.2, 0.4, 0.2]}],
+    "particles": {"dx": 0.02},
+    "physics": {"gravity": [0.0, 0.0, -9.81]},
+    "time": {"t_end": 0.01},
+    "plugins": {"use": ["reflective", "wall_integral"]},
+}
 
 
-def _setup(text):
-    ctx = context(text)
+def _setup(case):
+    ctx = context(case)
     prm = ctx.params
     verts = np.ascontiguousarray(ctx.case.faces.verts, dtype=np.float64)
     grid = build_grid(verts, prm.support).arrays()
@@ -94,9 +72,9 @@ def _fluid_points(ctx, n, seed):
     return np.ascontiguousarray(pts[keep])
 
 
-@pytest.mark.parametrize("text", [SQUARE_2D, BOX_3D], ids=["square-2d", "box-3d"])
-def test_table_equals_the_exact_terms_at_its_nodes(text):
-    ctx, verts, grid, table = _setup(text)
+@pytest.mark.parametrize("case", [SQUARE_2D, BOX_3D], ids=["square-2d", "box-3d"])
+def test_table_equals_the_exact_terms_at_its_nodes(case):
+    ctx, verts, grid, table = _setup(case)
     dim = ctx.params.dim
     rng = np.random.default_rng(3)
     idx = rng.integers(0, table.shape[:dim], (400, dim))
@@ -108,14 +86,14 @@ def test_table_equals_the_exact_terms_at_its_nodes(text):
         assert np.allclose(t, e, rtol=1e-9, atol=1e-12)
 
 
-@pytest.mark.parametrize("text,bounds", [
+@pytest.mark.parametrize("case,bounds", [
     # measured (seed 5, grid shifted off the faces' coordinates): 2D |ds| 0.0104, |dG| h 0.0098,
     # |dTg| 0.135 m/s^2; 3D 0.0064, 0.0100, 0.146 (largest next to the box's edges)
     (SQUARE_2D, (0.015, 0.015, 0.25)),
     (BOX_3D, (0.015, 0.015, 0.25)),
 ], ids=["square-2d", "box-3d"])
-def test_table_interpolates_within_its_stated_error(text, bounds):
-    ctx, verts, grid, table = _setup(text)
+def test_table_interpolates_within_its_stated_error(case, bounds):
+    ctx, verts, grid, table = _setup(case)
     h = ctx.params.h
     pts = _fluid_points(ctx, 40_000, 5)
     assert pts.shape[0] > 2_000
@@ -148,12 +126,12 @@ def test_inside_a_solid_the_table_continues_s_smoothly():
 
 
 def test_the_plugin_uses_the_table_when_asked_and_says_so():
-    text = SQUARE_2D + '[wall_integral]\nfaces = "table"\n'
+    table_case = case_with(SQUARE_2D, {"wall_integral.faces": "table"})
     from sphcore.physics.equations import WallTerms
     from sphcore_plugins.wall_integral import WallIntegralPlugin
 
     out = {}
-    for key, case in (("exact", SQUARE_2D), ("table", text)):
+    for key, case in (("exact", SQUARE_2D), ("table", table_case)):
         ctx = context(case)
         plugin = WallIntegralPlugin()
         plugin.sph_configure(case=ctx.case)
@@ -174,7 +152,7 @@ def test_a_table_above_its_node_limit_falls_back_to_the_exact_terms():
     from sphcore.physics.equations import WallTerms
     from sphcore_plugins.wall_integral import WallIntegralPlugin
 
-    ctx = context(SQUARE_2D + '[wall_integral]\nfaces = "table"\ntable_max_nodes = 100\n')
+    ctx = context(case_with(SQUARE_2D, {"wall_integral": {"faces": "table", "table_max_nodes": 100}}))
     plugin = WallIntegralPlugin()
     plugin.sph_configure(case=ctx.case)
     n = ctx.state.n

@@ -90,25 +90,20 @@ def test_an_obstacle_share_is_the_integral_of_the_kernel_over_it(shape):
 
 def _plugin_terms(domain, calls=1):
     """The wall_integral plugin's terms on the initial lattice of a 0.5 x 0.3 block of water
-    in the corner of a 1 m tank given by ``domain``, at the last of ``calls`` calls."""
+    in the corner of a 1 m tank given by ``domain`` (the case's domain table), at the last of
+    ``calls`` calls."""
     from sphcore.physics.equations import WallTerms
     from sphcore.testing import context
     from sphcore_plugins.wall_integral import WallIntegralPlugin
 
-    ctx = context(f"""
-[case]
-dim = 2
-{domain}
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.5, 0.3]
-[particles]
-dx = 0.02
-[time]
-t_end = 0.01
-[plugins]
-use = ["reflective", "wall_integral"]
-""")
+    ctx = context({
+        "case": {"dim": 2},
+        "domain": domain,
+        "blocks": [{"min": [0.0, 0.0], "max": [0.5, 0.3]}],
+        "particles": {"dx": 0.02},
+        "time": {"t_end": 0.01},
+        "plugins": {"use": ["reflective", "wall_integral"]},
+    })
     plugin = WallIntegralPlugin()
     plugin.sph_configure(case=ctx.case)
     n = ctx.state.n
@@ -120,9 +115,9 @@ use = ["reflective", "wall_integral"]
 
 
 def test_the_plugin_on_a_tank_of_faces_gives_the_planes_terms_but_the_lattice_correction():
-    planes = _plugin_terms("[domain]\nmin = [0.0, 0.0]\nmax = [1.0, 1.0]")
-    faces = _plugin_terms('[[domain.walls]]\nshape = "polygon"\nfluid = "inside"\n'
-                          'points = [[0, 0], [1, 0], [1, 1], [0, 1]]')
+    planes = _plugin_terms({"min": [0.0, 0.0], "max": [1.0, 1.0]})
+    faces = _plugin_terms({"walls": [{"shape": "polygon", "fluid": "inside",
+                                      "points": [[0, 0], [1, 0], [1, 1], [0, 1]]}]})
     near = planes.share > 0
     assert near.sum() > 100 and np.array_equal(near, faces.share > 0)
     assert np.allclose(faces.share, planes.share, rtol=0, atol=1e-12)
@@ -138,7 +133,7 @@ def test_the_terms_of_faces_are_the_same_on_every_call():
     # the faces already taken for a particle are marked per call: a mark left by the same
     # particle index in an earlier call must not hide a face (it did: every face after the
     # first step)
-    domain = '[[domain.walls]]\nshape = "polygon"\nfluid = "inside"\npoints = [[0, 0], [1, 0], [1, 1], [0, 1]]'
+    domain = {"walls": [{"shape": "polygon", "fluid": "inside", "points": [[0, 0], [1, 0], [1, 1], [0, 1]]}]}
     once, thrice = _plugin_terms(domain), _plugin_terms(domain, calls=3)
     for a, b in zip(once[:5], thrice[:5]):
         assert np.array_equal(a, b)

@@ -12,39 +12,28 @@ import pytest
 
 from sphcore.run import runner
 from sphcore.run.build import build
-from sphcore.testing import run_case, write_case
+from sphcore.testing import case_with, run_case, write_case
 
-BOX = """
-[case]
-dim = {dim}
-[domain]
-min = {lo}
-max = {hi}
-[[blocks]]
-min = {lo}
-max = {hi}
-[particles]
-dx = 0.02
-[physics]
-gravity = [0.0, 0.0, 0.0]
-hydrostatic_init = false
-[eos]
-c0 = 20.0
-p_background = 5000.0
-[viscosity]
-alpha = 0.0
-[time]
-t_end = 0.01
-[plugins]
-use = {use}
-"""
+
+def box(dim, lo, hi, use) -> dict:
+    """The box from ``lo`` to ``hi`` filled with fluid at 5 kPa, no gravity, plugins ``use``."""
+    return {
+        "case": {"dim": dim},
+        "domain": {"min": lo, "max": hi},
+        "blocks": [{"min": lo, "max": hi}],
+        "particles": {"dx": 0.02},
+        "physics": {"gravity": [0.0, 0.0, 0.0], "hydrostatic_init": False},
+        "eos": {"c0": 20.0, "p_background": 5000.0},
+        "viscosity": {"alpha": 0.0},
+        "time": {"t_end": 0.01},
+        "plugins": {"use": use},
+    }
 
 
 def box_sim(tmp_path, dim, use, h_over_dx=1.3):
     lo = [0.0] * dim
     hi = [0.2] * dim
-    text = BOX.format(dim=dim, lo=lo, hi=hi, use=use) + f"\n[kernel]\nh_over_dx = {h_over_dx}\n"
-    case_dir = write_case(tmp_path / f"box{dim}", text)
+    case_dir = write_case(tmp_path / f"box{dim}", case_with(box(dim, lo, hi, use), {"kernel.h_over_dx": h_over_dx}))
     case, pm = runner.load(case_dir)
     sim = build(case, pm)
     sim.integrator.rates()
@@ -57,37 +46,25 @@ def test_a_uniform_pressure_pushes_no_particle(tmp_path, dim, h_over_dx):
     """5 kPa everywhere in a box filled with fluid, no gravity: every acceleration is zero
     with the wall model (to round-off), including edges and corners; without it the
     particles along the walls are pushed into them."""
-    with_walls = box_sim(tmp_path, dim, '["reflective", "wall_integral"]', h_over_dx)
+    with_walls = box_sim(tmp_path, dim, ["reflective", "wall_integral"], h_over_dx)
     a = np.linalg.norm(with_walls.integrator.acc, axis=1)
     p_scale = 5000.0 / 1000.0 / (h_over_dx * 0.02)  # p / (rho h): the size of one unbalanced term
     assert a.max() < 1e-9 * p_scale
-    bare = box_sim(tmp_path / "bare", dim, '["reflective"]', h_over_dx)
+    bare = box_sim(tmp_path / "bare", dim, ["reflective"], h_over_dx)
     assert np.linalg.norm(bare.integrator.acc, axis=1).max() > 0.1 * p_scale
 
 
-TANK = """
-[case]
-dim = 2
-[domain]
-min = [0.0, 0.0]
-max = [0.4, 0.5]
-[[blocks]]
-min = [0.0, 0.0]
-max = [0.4, 0.4]
-[particles]
-dx = 0.02
-[kernel]
-h_over_dx = 2.0
-[density_diffusion]
-delta = 0.1
-hydrostatic = true
-[time]
-t_end = 0.5
-[plugins]
-use = {use}
-[reflective]
-cr = 0.0
-"""
+TANK = {
+    "case": {"dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [0.4, 0.5]},
+    "blocks": [{"min": [0.0, 0.0], "max": [0.4, 0.4]}],
+    "particles": {"dx": 0.02},
+    "kernel": {"h_over_dx": 2.0},
+    "density_diffusion": {"delta": 0.1, "hydrostatic": True},
+    "time": {"t_end": 0.5},
+    "plugins": {"use": []},
+    "reflective": {"cr": 0.0},
+}
 
 
 def layer_error(summary):
@@ -100,8 +77,8 @@ def test_wall_model_keeps_a_tank_at_rest_with_plain_tait(tmp_path):
     (measured 1.4%) and no particle moves by more than 0.1 dx (measured 0.06 dx, the
     free-surface corners included; the columns along the side walls do not slide); the
     reflective walls alone leave the layers 27% off with particles moved by 3 dx."""
-    model = run_case(tmp_path / "model", TANK.format(use='["reflective", "wall_integral", "pressure_gauge"]'))
-    bare = run_case(tmp_path / "bare", TANK.format(use='["reflective", "pressure_gauge"]'))
+    model = run_case(tmp_path / "model", TANK, plugins=["reflective", "wall_integral", "pressure_gauge"])
+    bare = run_case(tmp_path / "bare", TANK, plugins=["reflective", "pressure_gauge"])
     assert model["status"] == bare["status"] == "completed"
     assert model["pressure_gauge"]["particles_lost"] == 0
     assert layer_error(model) < 0.02
@@ -137,8 +114,8 @@ def test_a_column_along_a_side_wall_is_held_up_as_the_interior(tmp_path, h_over_
     0.11 before the wall completion took the interior's lattice normalisation lambda and
     the side wall's lattice error F into account). A mismatch there makes the columns
     along the walls slide against the bulk."""
-    text = TANK.format(use='["reflective", "wall_integral"]').replace("h_over_dx = 2.0", f"h_over_dx = {h_over_dx}")
-    case_dir = write_case(tmp_path / "tank", text)
+    case = case_with(TANK, {"plugins.use": ["reflective", "wall_integral"], "kernel.h_over_dx": h_over_dx})
+    case_dir = write_case(tmp_path / "tank", case)
     case, pm = runner.load(case_dir)
     sim = build(case, pm)
     sim.integrator.rates()
@@ -160,11 +137,9 @@ def test_a_lone_particle_near_a_wall_gets_no_wall_completion(tmp_path):
     empty, so the wall neither pushes it nor changes its density (acceleration g, zero in
     this box; drho/dt 0). With the lattice's wall gradient applied in full it lost density at about
     2 rho v |G| ~ 10^5 kg/m^3/s (a Lobovsky splash particle fell below 0.5 rho0)."""
-    text = BOX.format(dim=2, lo=[0.0, 0.0], hi=[0.2, 0.2], use='["reflective", "wall_integral"]')
-    text = text.replace("max = [0.2, 0.2]\n[particles]", "max = [0.02, 0.02]\n[particles]")
-    text = text.replace("[[blocks]]\nmin = [0.0, 0.0]", "[[blocks]]\nmin = [0.09, 0.02]").replace(
-        "max = [0.02, 0.02]\n[particles]", "max = [0.11, 0.04]\n[particles]")
-    case_dir = write_case(tmp_path / "lone", text)
+    case = case_with(box(2, [0.0, 0.0], [0.2, 0.2], ["reflective", "wall_integral"]),
+                     {"blocks[0].min": [0.09, 0.02], "blocks[0].max": [0.11, 0.04]})
+    case_dir = write_case(tmp_path / "lone", case)
     case, pm = runner.load(case_dir)
     sim = build(case, pm)
     st = sim.ctx.state
@@ -209,8 +184,7 @@ def test_a_stagnation_flow_changes_the_density_only_where_the_kernel_is_truncate
     dx, hdx, side = 0.02, 1.3, 0.3
     h = hdx * dx
     lo, hi = [0.0] * dim, [side] * dim
-    text = BOX.format(dim=dim, lo=lo, hi=hi, use='["reflective"]')
-    case, pm = runner.load(write_case(tmp_path / "box", text))
+    case, pm = runner.load(write_case(tmp_path / "box", box(dim, lo, hi, ["reflective"])))
     sim = build(case, pm)
     st = sim.ctx.state
     x = st.pos

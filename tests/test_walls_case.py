@@ -16,69 +16,52 @@ from sphcore.errors import CaseError
 from sphcore.geometry.faces import box
 from sphcore.run import runner
 from sphcore.run.build import build
-from sphcore.testing import write_case
-
-BASE = """
-[case]
-dim = {dim}
-
-[domain]
-{domain}
-
-{walls}
-
-[[blocks]]
-min = {bmin}
-max = {bmax}
-
-[particles]
-dx = {dx}
-
-[time]
-t_end = {t_end}
-
-[plugins]
-use = {plugins}
-"""
+from sphcore.testing import case_with, write_case
 
 
-def case_text(walls, dim=2, domain="min = [0.0, 0.0]\nmax = [1.0, 1.0]", bmin=None, bmax=None, dx=0.02,
-              t_end=0.002, plugins='["reflective"]'):
-    bmin = bmin or [0.0] * dim
-    bmax = bmax or [0.4] * dim
-    return BASE.format(dim=dim, domain=domain, walls=walls, bmin=bmin, bmax=bmax, dx=dx, t_end=t_end,
-                       plugins=plugins)
+def walls_case(wall, dim=2, domain=None, bmin=None, bmax=None, dx=0.02, t_end=0.002, plugins=("reflective",)):
+    """A case with the finite wall ``wall`` (one [[domain.walls]] entry) beside the rest of
+    ``domain`` (default: the unit box's min and max), and one block of water."""
+    domain = {"min": [0.0, 0.0], "max": [1.0, 1.0]} if domain is None else domain
+    return {
+        "case": {"dim": dim},
+        "domain": {**domain, "walls": [wall]},
+        "blocks": [{"min": bmin or [0.0] * dim, "max": bmax or [0.4] * dim}],
+        "particles": {"dx": dx},
+        "time": {"t_end": t_end},
+        "plugins": {"use": list(plugins)},
+    }
 
 
-def load(tmp_path, text):
-    return runner.load(write_case(tmp_path / "c", text))
+def load(tmp_path, case):
+    return runner.load(write_case(tmp_path / "c", case))
 
 
-@pytest.mark.parametrize("walls, key, words", [
-    ('[[domain.walls]]\nshape = "sphere"', "domain.walls[0].shape", "one of"),
-    ('[[domain.walls]]\nmin = [0.5, 0.5]\nmax = [0.6, 0.6]', "domain.walls[0].shape", "required"),
-    ('[[domain.walls]]\nshape = "box"\nmin = [0.5, 0.5]', "domain.walls[0].max", "required"),
-    ('[[domain.walls]]\nshape = "box"\nmin = [0.5, 0.5]\nmax = [0.4, 0.6]', "domain.walls[0].max", "above min"),
-    ('[[domain.walls]]\nshape = "box"\nmin = [0.5, 0.5]\nmax = [0.6, 0.6]\npoints = [[0, 0]]',
+@pytest.mark.parametrize("wall, key, words", [
+    ({"shape": "sphere"}, "domain.walls[0].shape", "one of"),
+    ({"min": [0.5, 0.5], "max": [0.6, 0.6]}, "domain.walls[0].shape", "required"),
+    ({"shape": "box", "min": [0.5, 0.5]}, "domain.walls[0].max", "required"),
+    ({"shape": "box", "min": [0.5, 0.5], "max": [0.4, 0.6]}, "domain.walls[0].max", "above min"),
+    ({"shape": "box", "min": [0.5, 0.5], "max": [0.6, 0.6], "points": [[0, 0]]},
      "domain.walls[0].points", "not used"),
-    ('[[domain.walls]]\nshape = "polygon"\npoints = [[0.5, 0.5], [0.6, 0.5]]', "domain.walls[0].points",
+    ({"shape": "polygon", "points": [[0.5, 0.5], [0.6, 0.5]]}, "domain.walls[0].points",
      "at least 3"),
-    ('[[domain.walls]]\nshape = "polygon"\npoints = [[0.5, 0.5], [0.7, 0.7], [0.7, 0.5], [0.5, 0.7]]',
+    ({"shape": "polygon", "points": [[0.5, 0.5], [0.7, 0.7], [0.7, 0.5], [0.5, 0.7]]},
      "domain.walls[0].points", "cross"),
-    ('[[domain.walls]]\nshape = "polyline"\npoints = [[0.5, 0.5], [0.7, 0.7]]\nfluid = "inside"',
+    ({"shape": "polyline", "points": [[0.5, 0.5], [0.7, 0.7]], "fluid": "inside"},
      "domain.walls[0].fluid", "both sides"),
-    ('[[domain.walls]]\nshape = "mesh"\nfile = "nowhere.stl"', "domain.walls[0].file", "nowhere.stl"),
-    ('[[domain.walls]]\nshape = "box"\nmin = [0.5, 0.5]\nmax = [0.6, 0.6]\ncolour = "red"',
+    ({"shape": "mesh", "file": "nowhere.stl"}, "domain.walls[0].file", "nowhere.stl"),
+    ({"shape": "box", "min": [0.5, 0.5], "max": [0.6, 0.6], "colour": "red"},
      "domain.walls[0].colour", ""),
 ])
-def test_bad_walls_name_the_key(tmp_path, walls, key, words):
+def test_bad_walls_name_the_key(tmp_path, wall, key, words):
     with pytest.raises(CaseError) as err:
-        load(tmp_path, case_text(walls))
+        load(tmp_path, walls_case(wall))
     assert err.value.key == key and words in err.value.expected and err.value.file.endswith("case.toml")
 
 
 def test_bad_wall_exits_2_and_writes_nothing(tmp_path, capsys):
-    d = write_case(tmp_path / "c", case_text('[[domain.walls]]\nshape = "polygon"\npoints = [[0.5, 0.5]]'))
+    d = write_case(tmp_path / "c", walls_case({"shape": "polygon", "points": [[0.5, 0.5]]}))
     before = sorted(p.name for p in d.iterdir())
     assert cli.main(["run", str(d)]) == 2
     assert "domain.walls[0].points" in capsys.readouterr().err
@@ -91,17 +74,16 @@ def test_a_mesh_that_is_not_closed_is_refused(tmp_path):
     tris = box([0.4, 0.4, 0.4], [0.6, 0.6, 0.6])[:-1]  # one triangle missing
     pts = tris.reshape(-1, 3)
     meshio.write(d / "open.stl", meshio.Mesh(pts, [("triangle", np.arange(len(pts)).reshape(-1, 3))]))
-    text = case_text('[[domain.walls]]\nshape = "mesh"\nfile = "open.stl"', dim=3,
-                     domain="min = [0.0, 0.0, 0.0]\nmax = [1.0, 1.0, 1.0]", dx=0.05)
+    case = walls_case({"shape": "mesh", "file": "open.stl"}, dim=3,
+                      domain={"min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]}, dx=0.05)
     with pytest.raises(CaseError) as err:
-        runner.load(write_case(d, text))
+        runner.load(write_case(d, case))
     assert "not closed" in err.value.expected and "open.stl" in err.value.expected
 
 
 def test_blocks_are_clipped_by_walls_and_check_counts_them(tmp_path, capsys):
     # a box obstacle inside the block: particles in it or within a radius of it are not made
-    text = case_text('[[domain.walls]]\nshape = "box"\nmin = [0.1, 0.0]\nmax = [0.2, 0.1]')
-    case, pm = load(tmp_path, text)
+    case, pm = load(tmp_path, walls_case({"shape": "box", "min": [0.1, 0.0], "max": [0.2, 0.1]}))
     sim = build(case, pm, None)
     st = sim.state
     assert st.n + st.removed_by_walls == 400
@@ -115,11 +97,10 @@ def test_blocks_are_clipped_by_walls_and_check_counts_them(tmp_path, capsys):
 
 def test_a_tank_given_by_a_mesh_alone(tmp_path):
     # no planes: an L-shaped 2D tank from a polygon with fluid inside
-    walls = ('[[domain.walls]]\nshape = "polygon"\nfluid = "inside"\n'
-             'points = [[0, 0], [1, 0], [1, 0.3], [0.4, 0.3], [0.4, 1], [0, 1]]')
-    text = case_text(walls, domain="", bmin=[0.0, 0.0], bmax=[0.4, 0.6], t_end=0.3,
-                     plugins='["reflective"]')
-    case, pm = load(tmp_path, text)
+    wall = {"shape": "polygon", "fluid": "inside",
+            "points": [[0, 0], [1, 0], [1, 0.3], [0.4, 0.3], [0.4, 1], [0, 1]]}
+    case, pm = load(tmp_path, walls_case(wall, domain={}, bmin=[0.0, 0.0], bmax=[0.4, 0.6], t_end=0.3,
+                                         plugins=["reflective"]))
     assert case.planes.count == 0 and case.faces.count == 6
     sim = build(case, pm, None)
     n0 = sim.state.n
@@ -138,13 +119,12 @@ def test_water_falls_onto_a_box_obstacle_and_stays_out_of_it(tmp_path, dim):
     lo, hi = [0.3] + [0.0] * (dim - 1), [0.5] + [0.15] * (dim - 1)
     if dim == 3:
         lo[1], hi[1] = 0.05, 0.25
-    walls = f'[[domain.walls]]\nshape = "box"\nmin = {lo}\nmax = {hi}'
-    domain = "min = [0.0, 0.0]\nmax = [1.0, 1.0]" if dim == 2 else "min = [0.0, 0.0, 0.0]\nmax = [1.0, 0.3, 1.0]"
+    wall = {"shape": "box", "min": lo, "max": hi}
+    domain = {"min": [0.0, 0.0], "max": [1.0, 1.0]} if dim == 2 else {"min": [0.0, 0.0, 0.0], "max": [1.0, 0.3, 1.0]}
     bmin = [0.25, 0.3] if dim == 2 else [0.25, 0.0, 0.3]
     bmax = [0.55, 0.6] if dim == 2 else [0.55, 0.3, 0.6]
-    text = case_text(walls, dim=dim, domain=domain, bmin=bmin, bmax=bmax, dx=0.02 if dim == 2 else 0.03,
-                     t_end=0.35 if dim == 2 else 0.25)
-    case, pm = load(tmp_path, text)
+    case, pm = load(tmp_path, walls_case(wall, dim=dim, domain=domain, bmin=bmin, bmax=bmax,
+                                         dx=0.02 if dim == 2 else 0.03, t_end=0.35 if dim == 2 else 0.25))
     sim = build(case, pm, None)
     n0 = sim.state.n
     e = "z" if dim == 3 else "y"
@@ -160,9 +140,9 @@ def test_water_falls_onto_a_box_obstacle_and_stays_out_of_it(tmp_path, dim):
 
 
 def test_walls_are_written_for_paraview(tmp_path):
-    text = case_text('[[domain.walls]]\nshape = "polygon"\npoints = [[0.6, 0.0], [0.8, 0.0], [0.7, 0.2]]',
-                     plugins='["reflective", "vtu"]')
-    d = write_case(tmp_path / "c", text)
+    case = walls_case({"shape": "polygon", "points": [[0.6, 0.0], [0.8, 0.0], [0.7, 0.2]]},
+                      plugins=["reflective", "vtu"])
+    d = write_case(tmp_path / "c", case)
     assert cli.main(["run", str(d), "--progress", "off"]) == 0
     mesh = meshio.read(d / "output" / "c_walls.vtu")
     assert mesh.cells[0].type == "line" and len(mesh.cells[0].data) == 3
@@ -176,11 +156,11 @@ def test_walls_are_written_for_paraview(tmp_path):
 
 
 def test_a_probe_inside_an_obstacle_is_refused_one_on_its_face_is_not(tmp_path):
-    walls = '[[domain.walls]]\nshape = "box"\nmin = [0.6, 0.0]\nmax = [0.8, 0.2]'
+    wall = {"shape": "box", "min": [0.6, 0.0], "max": [0.8, 0.2]}
     for point, ok in (([0.7, 0.1], False), ([0.6, 0.1], True), ([0.5, 0.1], True)):
-        text = case_text(walls, plugins='["reflective", "probes"]') + (
-            f'\n[[probes.pressure]]\nname = "P"\npoint = {point}\n')
-        d = write_case(tmp_path / f"c{point[0]}", text)
+        case = case_with(walls_case(wall, plugins=["reflective", "probes"]),
+                         {"probes.pressure": [{"name": "P", "point": point}]})
+        d = write_case(tmp_path / f"c{point[0]}", case)
         if ok:
             runner.load(d)
         else:
@@ -195,12 +175,12 @@ def test_the_wall_model_holds_a_tank_with_a_step_at_rest(tmp_path):
     # (no modified pressure), delta = 0.1: with the wall model on planes and faces the
     # hydrostatic pressure holds to 3.2 % and no particle moves a grid spacing in 1 s
     # (measured; reflective walls alone: 49 % and 5.6 dx, docs/walls.md)
-    text = case_text('[[domain.walls]]\nshape = "box"\nmin = [0.4, 0.0]\nmax = [0.6, 0.2]',
-                     domain="min = [0.0, 0.0]\nmax = [1.0, 1.2]", bmin=[0.0, 0.0], bmax=[1.0, 1.0],
-                     t_end=1.0, plugins='["reflective", "wall_integral", "pressure_gauge"]')
-    text += ("\n[physics]\nmodified_pressure = false\n[density_diffusion]\ndelta = 0.1\nhydrostatic = true\n"
-             "[viscosity]\nalpha = 0.1\n[reflective]\ncr = 0.0\n")
-    d = write_case(tmp_path / "c", text)
+    case = walls_case({"shape": "box", "min": [0.4, 0.0], "max": [0.6, 0.2]},
+                      domain={"min": [0.0, 0.0], "max": [1.0, 1.2]}, bmin=[0.0, 0.0], bmax=[1.0, 1.0],
+                      t_end=1.0, plugins=["reflective", "wall_integral", "pressure_gauge"])
+    case = case_with(case, {"physics.modified_pressure": False, "density_diffusion": {"delta": 0.1, "hydrostatic": True},
+                            "viscosity.alpha": 0.1, "reflective.cr": 0.0})
+    d = write_case(tmp_path / "c", case)
     assert cli.main(["run", str(d), "--progress", "off"]) == 0
     gauge = json.loads((d / "output" / "summary.json").read_text())["pressure_gauge"]
     assert gauge["particles_lost"] == 0
@@ -209,9 +189,8 @@ def test_the_wall_model_holds_a_tank_with_a_step_at_rest(tmp_path):
 
 
 def test_ghosts_refuse_finite_walls_and_say_what_to_use(tmp_path):
-    text = case_text('[[domain.walls]]\nshape = "box"\nmin = [0.6, 0.0]\nmax = [0.8, 0.2]',
-                     plugins='["reflective", "ghost"]')
+    case = walls_case({"shape": "box", "min": [0.6, 0.0], "max": [0.8, 0.2]}, plugins=["reflective", "ghost"])
     with pytest.raises(CaseError) as err:
-        load(tmp_path, text)
+        load(tmp_path, case)
     assert err.value.key == "domain.walls" and "mirrors across wall planes only" in err.value.expected
     assert "wall_integral" in err.value.expected
