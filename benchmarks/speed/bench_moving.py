@@ -33,7 +33,7 @@ ROLL = [{"type": "sine_rotation", "centre": [1.0, 0.0], "amplitude": 4.0, "perio
 
 def simulation(root: Path, name: str, n: int, plugins: list[str], moving: bool):
     width, depth = 2.0, 0.5
-    dx = math.sqrt(width * depth / n)
+    dx = width / round(width / math.sqrt(width * depth / n))  # whole rows across the tank
     changes = {"domain.max": [width, 2.0 * depth], "blocks[0].max": [width, depth], "particles.dx": dx,
                "time.t_end": 100.0, "plugins.use": plugins, "viscosity.alpha": 0.1}
     if moving:
