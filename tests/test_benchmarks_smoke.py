@@ -245,6 +245,13 @@ def test_fuzz_reflective_finds_no_escape():
     figure(rate)
 
 
+def test_fuzz_moving_finds_no_escape():
+    out = output(script("fuzz/fuzz_moving.py", "--n", 8000, "--batch", 2000, "--quiet"))
+    (escapes,) = rows(rf"8,000 trajectories in 4 scenes: (\d+) escapes, {NUM} reflected, \d+ guard returns, "
+                      rf"{NUM} trajectories/s", out, 1)[0]
+    assert escapes == "0"
+
+
 def test_fuzz_faces_finds_no_escape_or_crossing():
     out = output(script("fuzz/fuzz_faces.py", "--n", 800, "--batch", 800, "--per-domain", 100, "--quiet"))
     (n, domains, escaped, crossed, nonfinite, rate), = rows(
