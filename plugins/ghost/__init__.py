@@ -23,6 +23,17 @@ combines the ghost pressure field with the reflective no-penetration guarantee; 
 plugins act in different hooks (sources before the forces, reflection after the free
 motion) and need no coordination.
 
+Walls that move (``[[domain.motion]]``, :mod:`sphcore.case.motion`): the planes of a moving
+tank mirror the fluid where they are when the forces are evaluated, and the images take
+the wall's velocity and acceleration (:mod:`.mirror`: free slip and no slip relative to
+the wall, the hydrostatic correction with g - a_w after Adami, Hu & Adams 2012, Eq. 27).
+A case with finite wall faces is refused, moving or not (the plugin mirrors across planes
+only). The leapfrog evaluates the end-of-step rates before the core advances ``ctx.t``;
+the plugin therefore takes the time of a force evaluation from its own
+``sph_after_integrate`` (t + dt between the free motion and the end of the step, ``ctx.t``
+otherwise), so that the planes are where the particles are in time. A case whose walls do
+not move takes the fixed-wall path unchanged.
+
 Run summary: ``ghosts_last`` (ghosts of the last force evaluation), ``ghosts_max``,
 ``ghost_reallocations`` (buffer growths).
 """
@@ -31,9 +42,10 @@ from __future__ import annotations
 
 from sphcore.api import CaseError, Fields, Option, hookimpl
 
-from .mirror import MAX_PLANES, TAIT_BASE_MIN, FluidConstants, MirrorImages, inverse_tait
+from .mirror import MAX_PLANES, TAIT_BASE_MIN, FluidConstants, MirrorImages, PlaneGroup, WallMotion, inverse_tait
 
-__all__ = ["GhostPlugin", "MirrorImages", "FluidConstants", "inverse_tait", "TAIT_BASE_MIN"]
+__all__ = ["GhostPlugin", "MirrorImages", "FluidConstants", "PlaneGroup", "WallMotion", "inverse_tait",
+           "TAIT_BASE_MIN"]
 
 TABLE = "ghost"
 
@@ -43,6 +55,11 @@ class GhostPlugin:
 
     def __init__(self):
         self.mirror: MirrorImages | None = None
+        # the moving tank's group (sphcore.geometry.motion.MovingGroup), None: fixed planes
+        self.tank = None
+        # (step, t, t + dt) of the last free motion: the particles are at t + dt until the
+        # core advances its clock (see the module docstring)
+        self._moved: tuple | None = None
 
     @hookimpl
     def sph_options(self):
@@ -70,8 +87,9 @@ class GhostPlugin:
             raise CaseError(file, "plugins.use", "the ghost plugin needs wall planes ([domain] min/max or planes)")
         faces = getattr(case, "faces", None)
         if faces is not None and faces.count:
+            moving = " (moving or not)" if any(len(g.faces) for g in getattr(case, "moving", ())) else ""
             raise CaseError(file, "domain.walls", f"the ghost plugin mirrors across wall planes only; the case "
-                            f"has {faces.count} finite wall faces: use reflective and wall_integral")
+                            f"has {faces.count} finite wall faces{moving}: use reflective and wall_integral")
         if planes.count > MAX_PLANES:
             raise CaseError(file, "domain.planes", f"the ghost plugin handles at most {MAX_PLANES} wall planes, "
                             f"got {planes.count}")
@@ -80,6 +98,29 @@ class GhostPlugin:
             raise CaseError(file, "plugins.use", "the ghost plugin acts through SPH forces; physics.sph is false")
         self.mirror = MirrorImages(planes.normals, planes.offsets, free_slip=cfg["wall"] == "free_slip",
                                    hydrostatic=cfg["hydrostatic"])
+        self.tank = next((g for g in getattr(case, "moving", ()) if g.planes), None)
+        self._moved = None
+
+    @hookimpl
+    def sph_moving_walls(self):
+        # the planes of a moving tank mirror where they are, with the wall's velocity and
+        # acceleration (module docstring); finite faces are refused in sph_configure
+        return True
+
+    @hookimpl
+    def sph_after_integrate(self, ctx, dt):
+        # only records the time the particles are at now; moves nothing
+        if self.tank is not None:
+            self._moved = (ctx.step, ctx.t, ctx.t + dt)
+
+    def evaluation_time(self, ctx) -> float:
+        """The time (s) of the particles a force evaluation sees: t + dt between a step's
+        free motion and the core's clock update (the leapfrog's end-of-step rates),
+        ``ctx.t`` otherwise."""
+        moved = self._moved
+        if moved is not None and moved[0] == ctx.step and moved[1] == ctx.t:
+            return moved[2]
+        return ctx.t
 
     @hookimpl
     def sph_extra_sources(self, ctx):
@@ -87,7 +128,13 @@ class GhostPlugin:
         st = ctx.state
         # the pressure the momentum equation uses: with modified pressure, its dynamic part
         fluid = Fields(st.pos, st.vel, st.rho, ctx.force_pressure, st.m)
-        src = self.mirror.generate(fluid, st.kind, ctx.params)
+        if self.tank is None:
+            src = self.mirror.generate(fluid, st.kind, ctx.params)
+        else:
+            t = self.evaluation_time(ctx)
+            planes = ctx.planes_at(t)
+            src = self.mirror.generate(fluid, st.kind, ctx.params, walls=PlaneGroup(planes.normals, planes.offsets),
+                                       motion=WallMotion.of(self.tank.motion.pose(t)))
         stats = ctx.stats(self)  # in the summary and the checkpoint: cumulative across restarts
         stats["ghosts_max"] = max(stats.get("ghosts_max", 0), src.n)
         stats["ghosts_last"] = src.n

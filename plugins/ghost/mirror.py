@@ -33,6 +33,30 @@ Ghost state, from the mirrored fluid particle i:
   tangential kept, v_g = v - 2 (v . n) n per plane); no slip reverses it, v_g = -v_i, so
   the wall velocity (zero) is the average of the pair.
 
+Walls that move (a tank on a prescribed path, :mod:`sphcore.geometry.motion`): the planes
+are those of the force evaluation's time, and the tank is a rigid body whose point now at x
+moves with v_w(x) = V + Omega x r and accelerates with a_w(x) = A + alpha x r + Omega x
+(Omega x r), r = x - c - D (:class:`WallMotion`). The images' state follows the wall:
+
+- free slip: the rule above on the velocity relative to the wall, plane by plane, at the
+  foot f = x - d n of the point being mirrored (for a single image the mirror point on the
+  wall): v <- v - 2 ((v - v_w(f)) . n) n;
+- no slip: v_g = 2 v_w(m) - v_i, m = (x_i + x_g) / 2 the wall point between the pair (the
+  foot for a single image, the corner for a corner image), so that the pair again averages
+  to the wall's velocity;
+- pressure (with the hydrostatic correction): the fluid at rest relative to an
+  accelerating wall has grad p = rho (g - a_w), so the correction carries the pressure with
+  g - a_w instead of g, as Adami, Hu & Adams (2012, J. Comput. Phys. 231, 7057-7075,
+  Eq. 27) do for the pressure of dummy wall particles,
+  p_w = (sum_f p_f W_wf + (g - a_w) . sum_f rho_f r_wf W_wf) / sum_f W_wf, r_wf = x_w - x_f:
+  p_g = p_i + (rho_i - rho_ref) g . (x_g - x_i) - rho_i a_w(m) . (x_g - x_i).
+  The wall's acceleration enters with the full density rho_i also under modified pressure,
+  which removes rho0 g only. a_w is taken at the midpoint m of the segment from x_i to x_g,
+  where the line integral of the affine field rho_i (g - a_w(x)) along the segment is exact
+  (midpoint rule); Adami et al. take it at the dummy particle, the same for a translation.
+
+A case whose walls do not move takes the fixed-wall kernels (the same bits as ever).
+
 Generation is two numba passes over the particles (count, then fill at exclusive
 prefix-sum offsets), so no Python list is built; both run over all threads from
 ``PARALLEL_MIN`` particles on. :class:`MirrorImages` keeps the output buffers and grows
@@ -41,8 +65,9 @@ them geometrically.
 The kernels take their arguments as records (named tuples, passed to numba as structs):
 the fluid as :class:`sphcore.api.Fields`, the wall planes as a :class:`PlaneGroup`, the
 image rule as a :class:`MirrorRule`, the ghost state's constants as a
-:class:`GhostPressure`, the per-particle bookkeeping of the passes as :class:`Passes` and
-the output buffers as :class:`Images`.
+:class:`GhostPressure`, the motion of moving walls as a :class:`WallMotion`, the
+per-particle bookkeeping of the passes as :class:`Passes` and the output buffers as
+:class:`Images`.
 """
 
 from __future__ import annotations
@@ -76,12 +101,39 @@ class PlaneGroup(NamedTuple):
     """One group of wall planes n . X = offset, each normal pointing into the domain.
 
     ``normals`` (k, dim) float64: unit normals; ``offsets`` (k,) float64: n . X0 (m) for a
-    point X0 of each plane. A group is the unit a wall pose (rotation, centre, velocity)
-    would attach to; the planes here are fixed.
+    point X0 of each plane. Fixed walls: the case's planes; walls that move: the planes
+    where they are at the force evaluation's time, with a :class:`WallMotion` beside them.
     """
 
     normals: np.ndarray
     offsets: np.ndarray
+
+
+class WallMotion(NamedTuple):
+    """The rigid motion of the wall planes at one instant (all (3,) float64, zero-padded
+    in 2D): the point of the walls now at x moves with v_w = ``velocity`` + ``omega`` x r
+    and accelerates with a_w = ``acceleration`` + ``alpha`` x r + ``omega`` x (``omega`` x
+    r), r = x - ``origin`` (m/s, rad/s, m/s^2, rad/s^2; the origin is the centre of
+    rotation where it is now, c + D of :class:`sphcore.geometry.motion.Pose`).
+    """
+
+    origin: np.ndarray
+    velocity: np.ndarray
+    omega: np.ndarray
+    acceleration: np.ndarray
+    alpha: np.ndarray
+
+    @classmethod
+    def of(cls, pose) -> WallMotion:
+        """The motion of the walls at a :class:`sphcore.geometry.motion.Pose`."""
+        def pad(v):
+            out = np.zeros(3)
+            v = np.asarray(v, dtype=np.float64).ravel()
+            out[: v.size] = v
+            return out
+
+        return cls(pad(np.asarray(pose.centre) + np.asarray(pose.shift)), pad(pose.velocity), pad(pose.omega),
+                   pad(pose.acceleration), pad(pose.alpha))
 
 
 class MirrorRule(NamedTuple):
@@ -212,6 +264,71 @@ def _image(fluid, i, walls, sub, rule):
         k += 1
     if not free_slip:
         v0, v1, v2 = -vel[i, 0], -vel[i, 1], (-vel[i, 2] if dim == 3 else 0.0)
+    dmin = np.inf
+    for k in range(normals.shape[0]):
+        dmin = min(dmin, plane_distance(normals, offsets, k, x0, x1, x2))
+    return dmin < -tol, x0, x1, x2, v0, v1, v2
+
+
+@njit(cache=True, inline="always")
+def _wall_velocity(motion, x0, x1, x2):
+    """(vx, vy, vz) of the wall point now at (x0, x1, x2): V + Omega x r (:class:`WallMotion`)."""
+    o, w, v = motion.origin, motion.omega, motion.velocity
+    r0, r1, r2 = x0 - o[0], x1 - o[1], x2 - o[2]
+    return (v[0] + w[1] * r2 - w[2] * r1,
+            v[1] + w[2] * r0 - w[0] * r2,
+            v[2] + w[0] * r1 - w[1] * r0)
+
+
+@njit(cache=True, inline="always")
+def _wall_acceleration(motion, x0, x1, x2):
+    """(ax, ay, az) of the wall point now at (x0, x1, x2): A + alpha x r + Omega x (Omega x r)."""
+    o, w, al, a = motion.origin, motion.omega, motion.alpha, motion.acceleration
+    r0, r1, r2 = x0 - o[0], x1 - o[1], x2 - o[2]
+    c0 = w[1] * r2 - w[2] * r1  # Omega x r
+    c1 = w[2] * r0 - w[0] * r2
+    c2 = w[0] * r1 - w[1] * r0
+    return (a[0] + al[1] * r2 - al[2] * r1 + w[1] * c2 - w[2] * c1,
+            a[1] + al[2] * r0 - al[0] * r2 + w[2] * c0 - w[0] * c2,
+            a[2] + al[0] * r1 - al[1] * r0 + w[0] * c1 - w[1] * c0)
+
+
+@njit(cache=True, inline="always")
+def _image_moving(fluid, i, walls, sub, rule, motion):
+    """:func:`_image` with walls that move as ``motion`` (:class:`WallMotion`): the same
+    position and keep; free slip reflects the velocity relative to the wall point at the
+    foot of each plane's mirroring, no slip gives 2 v_w(m) - v_i, m the midpoint of the
+    particle and its image (module docstring)."""
+    pos, vel = fluid.pos, fluid.vel
+    normals, offsets = walls.normals, walls.offsets
+    free_slip, tol = rule.free_slip, rule.tol
+    dim = pos.shape[1]
+    x0, x1 = pos[i, 0], pos[i, 1]
+    v0, v1 = vel[i, 0], vel[i, 1]
+    x2 = pos[i, 2] if dim == 3 else 0.0
+    v2 = vel[i, 2] if dim == 3 else 0.0
+    k = 0
+    s = sub
+    while s:
+        if s & 1:
+            n0, n1 = normals[k, 0], normals[k, 1]
+            n2 = normals[k, 2] if dim == 3 else 0.0
+            d = plane_distance(normals, offsets, k, x0, x1, x2)
+            if free_slip:
+                w0, w1, w2 = _wall_velocity(motion, x0 - d * n0, x1 - d * n1, x2 - d * n2)
+                vn = (v0 - w0) * n0 + (v1 - w1) * n1 + (v2 - w2) * n2
+                v0 -= 2.0 * vn * n0
+                v1 -= 2.0 * vn * n1
+                v2 -= 2.0 * vn * n2
+            x0 -= 2.0 * d * n0
+            x1 -= 2.0 * d * n1
+            x2 -= 2.0 * d * n2
+        s >>= 1
+        k += 1
+    if not free_slip:
+        xi2 = pos[i, 2] if dim == 3 else 0.0
+        w0, w1, w2 = _wall_velocity(motion, 0.5 * (pos[i, 0] + x0), 0.5 * (pos[i, 1] + x1), 0.5 * (xi2 + x2))
+        v0, v1, v2 = 2.0 * w0 - v0, 2.0 * w1 - v1, 2.0 * w2 - v2
     dmin = np.inf
     for k in range(normals.shape[0]):
         dmin = min(dmin, plane_distance(normals, offsets, k, x0, x1, x2))
@@ -362,6 +479,68 @@ def fill_images_serial(fluid, walls, rule, ghost, passes, out):
             _fill_one(fluid, i, near[i], walls, rule, ghost, start[i], out)
 
 
+@njit(cache=True, inline="always")
+def _fill_one_moving(fluid, i, near, walls, rule, ghost, motion, j, out):
+    """:func:`_fill_one` with walls that move as ``motion`` (:class:`WallMotion`): velocity
+    by :func:`_image_moving`, and the hydrostatic correction with g - a_w (Adami, Hu & Adams
+    2012, Eq. 27; module docstring)."""
+    pos, rho, p, m = fluid.pos, fluid.rho, fluid.p, fluid.m
+    gpos, gvel, grho, gp, gm, gsrc = out.pos, out.vel, out.rho, out.p, out.m, out.src
+    gravity, b = ghost.gravity, ghost.b
+    hydrostatic, rho_ref = ghost.hydrostatic, ghost.rho_ref
+    max_order = rule.max_order
+    dim = pos.shape[1]
+    xi0, xi1 = pos[i, 0], pos[i, 1]
+    xi2 = pos[i, 2] if dim == 3 else 0.0
+    sub = near
+    while sub:
+        if _popcount(sub) <= max_order:
+            keep, x0, x1, x2, v0, v1, v2 = _image_moving(fluid, i, walls, sub, rule, motion)
+            if keep:
+                gpos[j, 0] = x0
+                gpos[j, 1] = x1
+                gvel[j, 0] = v0
+                gvel[j, 1] = v1
+                if dim == 3:
+                    gpos[j, 2] = x2
+                    gvel[j, 2] = v2
+                if hydrostatic and b > 0.0:
+                    e0, e1, e2 = x0 - xi0, x1 - xi1, x2 - xi2
+                    rise = gravity[0] * e0 + gravity[1] * e1 + gravity[2] * e2
+                    a0, a1, a2 = _wall_acceleration(motion, xi0 + 0.5 * e0, xi1 + 0.5 * e1, xi2 + 0.5 * e2)
+                    # grad p = rho (g - a_w) in water at rest relative to the wall; the
+                    # modified pressure removes rho0 g only, so a_w counts with all of rho_i
+                    pg = p[i] + (rho[i] - rho_ref) * rise - rho[i] * (a0 * e0 + a1 * e1 + a2 * e2)
+                    gp[j] = pg
+                    grho[j] = eos.density(pg, ghost.rho0, b, ghost.inv_gamma, ghost.p_background)
+                else:
+                    gp[j] = p[i]
+                    grho[j] = rho[i]
+                gm[j] = m[i]
+                gsrc[j] = i
+                j += 1
+        sub = (sub - 1) & near
+
+
+@njit(cache=True, parallel=True)
+def fill_images_moving(fluid, walls, rule, ghost, motion, passes, out):
+    """:func:`fill_images` with walls that move as ``motion`` (:class:`WallMotion`);
+    ``walls``: the planes where they are now."""
+    near, start = passes.near, passes.start
+    for i in prange(fluid.pos.shape[0]):
+        if start[i + 1] > start[i]:
+            _fill_one_moving(fluid, i, near[i], walls, rule, ghost, motion, start[i], out)
+
+
+@njit(cache=True)
+def fill_images_moving_serial(fluid, walls, rule, ghost, motion, passes, out):
+    """:func:`fill_images_moving` on one thread."""
+    near, start = passes.near, passes.start
+    for i in range(fluid.pos.shape[0]):
+        if start[i + 1] > start[i]:
+            _fill_one_moving(fluid, i, near[i], walls, rule, ghost, motion, start[i], out)
+
+
 class MirrorImages:
     """Ghost generator for one set of planes, with output buffers reused between calls.
 
@@ -391,16 +570,24 @@ class MirrorImages:
         self._out = Images(np.zeros((cap, dim)), np.zeros((cap, dim)), np.zeros(cap), np.zeros(cap), np.zeros(cap),
                            np.zeros(cap, np.int64))
 
-    def generate(self, fluid, kind, constants):
+    def generate(self, fluid, kind, constants, walls=None, motion=None):
         """Ghosts of the current fluid as :class:`sphcore.api.Sources`.
 
         ``fluid``: :class:`sphcore.api.Fields` of the particles (pos m, vel m/s, rho
         kg/m^3, m kg; p the pressure the momentum equation uses, Pa); ``kind`` (n,) int8
         codes (only FLUID particles are mirrored); ``constants``: a :class:`FluidConstants`
         or the run's :class:`sphcore.api.Params` (support, gravity, rho0, c0, gamma,
-        p_background, rho_ref). The arrays returned are views of this object's buffers,
-        valid until the next call (the core copies them into its source arrays).
+        p_background, rho_ref). Walls that move: ``walls``, a :class:`PlaneGroup` of the
+        planes where they are now (the same planes in the same order as at construction),
+        and ``motion``, their :class:`WallMotion` now; without ``motion`` the images are
+        those of fixed walls (the fixed-wall kernels). The arrays returned are views of
+        this object's buffers, valid until the next call (the core copies them into its
+        source arrays).
         """
+        walls = self.walls if walls is None else walls
+        if walls.normals.shape != self.walls.normals.shape:
+            raise ValueError(f"expected {self.walls.normals.shape[0]} planes in {self.dim}D, got normals of shape "
+                             f"{walls.normals.shape}")
         n = fluid.pos.shape[0]
         if self._passes.counts.shape[0] != n:
             self._passes = Passes(np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n + 1, np.int64))
@@ -410,7 +597,7 @@ class MirrorImages:
         parallel = n >= PARALLEL_MIN
         count = count_images if parallel else count_images_serial
         fill = fill_images if parallel else fill_images_serial
-        count(fluid, kind, self.walls, rule, passes)
+        count(fluid, kind, walls, rule, passes)
         total = int(exclusive_scan(passes.counts, passes.start))
         if total > self.capacity:
             # geometric growth: a wave running up a wall raises the count a little at a time
@@ -419,7 +606,11 @@ class MirrorImages:
         rho0, c0, gamma = float(constants.rho0), float(constants.c0), float(constants.gamma)
         ghost = GhostPressure(self.hydrostatic, self._gravity(constants.gravity), float(constants.rho_ref), rho0,
                               float(eos.tait_b(c0, rho0, gamma)), 1.0 / gamma, float(constants.p_background))
-        fill(fluid, self.walls, rule, ghost, passes, self._out)
+        if motion is None:
+            fill(fluid, walls, rule, ghost, passes, self._out)
+        else:
+            fill = fill_images_moving if parallel else fill_images_moving_serial
+            fill(fluid, walls, rule, ghost, motion, passes, self._out)
         self.n = total
         out = self._out
         return Sources(out.pos[:total], out.vel[:total], out.rho[:total], out.p[:total], out.m[:total])
