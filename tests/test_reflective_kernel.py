@@ -264,7 +264,7 @@ def test_an_elastic_corner_contact_keeps_the_speed():
     at 20 degrees with its speed (the projection w, used before, kept cos 40 = 0.77 of it
     and lost 41 % of the kinetic energy). CR = 0.5 leaves it slower and admissible, CR = 0
     at the projection onto the floor."""
-    from sphcore_plugins.reflective.corner import HalfSpaces, Scratch, respond, scratch
+    from sphcore_plugins.reflective.corner import respond, scratch
 
     a, b = np.radians(30.0), np.radians(-40.0)
     nrm = np.array([[0.0, 1.0], [np.sin(a), -np.cos(a)]])  # floor y >= 0, wall below y = x tan 30
@@ -273,7 +273,7 @@ def test_an_elastic_corner_contact_keeps_the_speed():
         ws, wi = scratch()
         pos = np.array([[0.5, 0.01]])
         vel = np.array([[np.cos(b), np.sin(b)]])
-        assert respond(HalfSpaces(nrm, c, 2), pos, vel, 0, cr, 1e-12, Scratch(ws[0], wi[0]))
+        assert respond(nrm, c, 2, pos, vel, 0, cr, 1e-12, ws[0], wi[0])
         assert np.all(nrm @ vel[0] >= -1e-12)  # no velocity into either wall
         if cr == 1.0:
             np.testing.assert_allclose(vel[0], [np.cos(np.radians(20.0)), np.sin(np.radians(20.0))],

@@ -55,7 +55,7 @@ import numpy as np
 
 from sphcore.api import box_cells, build_grid, by_size, face_distance, particle_distance, plane_distance
 
-from .corner import MAX_ACTIVE, HalfSpaces, Scratch, respond, scratch
+from .corner import MAX_ACTIVE, Scratch, respond, scratch
 from .facecontact import FaceSet, contact_normal, earliest_face, empty_grid, near_any_face
 
 #: side of the face grid's cells in particle radii. A step's box (2 r + the step) spans at
@@ -156,20 +156,25 @@ def reflect_step(paths, walls, response, tally, work):
     :class:`WallGroup`; ``response``: :class:`Response`; ``tally``: :class:`Tally`,
     written for every particle; ``work``: :class:`.corner.Scratch` as :func:`.corner.scratch`
     allocates it, one row per block of particles.
+
+    The records are taken apart here, once: the functions called per particle take plain
+    arrays and scalars (with the records passed down, a step of 10 000 particles, 590 of
+    them reflected, took 8 % longer, measured).
     """
-    pos0, pos = paths.pos0, paths.pos
-    radius = paths.radius
-    normals, offsets = walls.normals, walls.offsets
-    guarded_flags, reflection_counts = tally
+    pos0, pos, vel, acc, radius = paths.pos0, paths.pos, paths.vel, paths.acc, paths.radius
+    normals, offsets, verts = walls.normals, walls.offsets, walls.verts
+    glo, ginv, gshape, gstart, gitems = walls.lo, walls.inv_cell, walls.shape, walls.start, walls.items
+    cr, max_reflections, velocity_at_contact = response.cr, response.max_reflections, response.velocity_at_contact
+    guarded_flags, reflection_counts = tally.guarded, tally.reflections
+    ws, wi = work.floats, work.ints
     n = pos.shape[0]
     three = pos.shape[1] == 3
-    rows = work.floats.shape[0]
+    rows = ws.shape[0]
     guarded = 0
     reflected = 0
     events = 0
     # blocks of particles, each with its own scratch row for corner contacts
     for b in numba.prange(rows):
-        row = Scratch(work.floats[b], work.ints[b])
         g = 0
         r = 0
         e = 0
@@ -184,11 +189,14 @@ def reflect_step(paths, walls, response, tally, work):
                 if particle_distance(normals, offsets, k, pos, i) < lim:
                     hit = True
                     break
-            if not hit and walls.verts.shape[0]:
-                hit = near_any_face(walls, (pos0[i, 0], pos0[i, 1], pos0[i, 2] if three else 0.0),
-                                    (pos[i, 0], pos[i, 1], pos[i, 2] if three else 0.0), lim)
+            if not hit and verts.shape[0]:
+                hit = near_any_face(verts, glo, ginv, gshape, gstart, gitems, pos0[i, 0], pos0[i, 1],
+                                    pos0[i, 2] if three else 0.0, pos[i, 0], pos[i, 1],
+                                    pos[i, 2] if three else 0.0, lim)
             if hit:
-                g += _reflect_one(i, paths, walls, response, tally, row)
+                g += _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv,
+                                  gshape, gstart, gitems, ws[b], wi[b], cr, max_reflections,
+                                  velocity_at_contact, guarded_flags, reflection_counts)
                 if reflection_counts[i] > 0:
                     r += 1
                     e += reflection_counts[i]
@@ -199,18 +207,14 @@ def reflect_step(paths, walls, response, tally, work):
 
 
 @numba.njit(cache=True)
-def _reflect_one(i, paths, walls, response, tally, work):
+def _reflect_one(i, pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,
+                 gitems, ws, wi, cr, max_reflections, velocity_at_contact, guarded_flags, reflection_counts):
     """The paper's loop for particle i (earliest contact first, until inside or the guard);
     returns 1 if the guard put it back at pos0, else 0. Planes and faces compete for the
     earliest contact; when a wall is met a second time in the step and the contact touches
     two or more walls, that contact is resolved as one (:mod:`.corner`) if CR < 1. With
     CR = 1 the paper's sequence is the exact (billiard) answer and ends in any corner (a
-    wedge of angle a lets a path through after about pi / a reflections): it is kept.
-    ``work``: this block's row of :class:`.corner.Scratch`."""
-    pos0, pos, vel, acc, radius = paths
-    normals, offsets, verts = walls.normals, walls.offsets, walls.verts
-    cr, max_reflections, velocity_at_contact = response
-    wi = work.ints
+    wedge of angle a lets a path through after about pi / a reflections): it is kept."""
     dim = pos.shape[1]
     nplanes = normals.shape[0]
     guarded = 0
@@ -237,14 +241,15 @@ def _reflect_one(i, paths, walls, response, tally, work):
                     best = k
                     dbest = db
         b2 = pos[i, 2] if dim == 3 else 0.0
-        face, fbest = earliest_face(walls, (a0, a1, a2), (pos[i, 0], pos[i, 1], b2), r, lim, fbest)
+        face, fbest = earliest_face(verts, glo, ginv, gshape, gstart, gitems, a0, a1, a2,
+                                    pos[i, 0], pos[i, 1], b2, r, lim, fbest)
         if best < 0 and face < 0:
             break
         if count == max_reflections:
             # guard: C0 is inside (the invariant); keep the velocity reflected so far
             for j in range(dim):
                 pos[i, j] = pos0[i, j]
-            tally.guarded[i] = 1
+            guarded_flags[i] = 1
             guarded = 1
             break
         # contact point C0' (Fig. 6): inside every wall, so the invariant holds for A
@@ -272,7 +277,8 @@ def _reflect_one(i, paths, walls, response, tally, work):
                 revisit = True
         wi[11 + count % 8] = wall
         count += 1
-        if revisit and cr < 1.0 and _corner(i, paths, walls, (a0, a1, a2), r, cr, work):
+        if revisit and cr < 1.0 and _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape,
+                                            gstart, gitems, a0, a1, a2, r, cr, ws, wi):
             continue
         depth = r - dbest  # > 0, how far the end point lies beyond contact (m)
         u = vel[i, 0] * n0 + vel[i, 1] * n1
@@ -295,7 +301,7 @@ def _reflect_one(i, paths, walls, response, tally, work):
         pos[i, 1] += shift * n1
         if dim == 3:
             pos[i, 2] += shift * n2
-    tally.reflections[i] = count
+    reflection_counts[i] = count
     return guarded
 
 
@@ -306,15 +312,10 @@ def plane_distance_n(n0, n1, n2, off, x0, x1, x2):
 
 
 @numba.njit(cache=True)
-def _corner(i, paths, walls, a, r, cr, work):
-    """Resolve the contact at A = ``a`` (x, y, z) of particle i (radius r, m) as one with
-    every wall of ``walls`` touching there (:mod:`.corner`) when two or more do; False
-    (nothing changed) otherwise. ``work``: this block's row of :class:`.corner.Scratch`."""
-    pos, vel = paths.pos, paths.vel
-    normals, offsets, verts = walls.normals, walls.offsets, walls.verts
-    glo, ginv, gshape, gstart, gitems = walls.lo, walls.inv_cell, walls.shape, walls.start, walls.items
-    ws, wi = work
-    a0, a1, a2 = a
+def _corner(i, pos, vel, normals, offsets, verts, glo, ginv, gshape, gstart, gitems, a0, a1, a2,
+            r, cr, ws, wi):
+    """Resolve the contact at A as one with every wall touching there (:mod:`.corner`) when
+    two or more do; False (nothing changed) otherwise. ws, wi: this thread's scratch."""
     dim = pos.shape[1]
     touch = r * (1.0 + 1e-6)
     nrm = ws[0:MAX_ACTIVE * dim].reshape((MAX_ACTIVE, dim))
@@ -351,7 +352,7 @@ def _corner(i, paths, walls, a, r, cr, work):
                             m += 1
     if m < 2:
         return False
-    return respond(HalfSpaces(nrm, c, m), pos, vel, i, cr, TOL_REL * r, work)
+    return respond(nrm, c, m, pos, vel, i, cr, TOL_REL * r, ws, wi)
 
 
 def reflect(pos0, pos, vel, acc, radius, normals, offsets, verts, glo, ginv, gshape, gstart,

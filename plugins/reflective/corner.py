@@ -69,16 +69,6 @@ class Scratch(NamedTuple):
     ints: np.ndarray
 
 
-class HalfSpaces(NamedTuple):
-    """The walls touching at one contact, as half-spaces normals[k] . X >= bounds[k] for
-    k < ``active``: ``normals`` (MAX_ACTIVE, dim) float64 unit vectors into the domain,
-    ``bounds`` (MAX_ACTIVE,) float64 (m), rows from ``active`` on unused."""
-
-    normals: np.ndarray
-    bounds: np.ndarray
-    active: int
-
-
 def scratch():
     """The :class:`Scratch` of the reflective kernel, (ROWS, NFLOAT) and (ROWS, NINT) rows,
     allocated once by the caller so that the kernel allocates nothing."""
@@ -181,14 +171,10 @@ def _solve(g, rhs, size, a, b, lam):
 
 
 @njit(cache=True)
-def respond(walls, pos, vel, i, cr, tol, work):
-    """The joint response for particle i of ``pos`` (m) and ``vel`` (m/s), (n, dim), changed
-    in place, to the walls ``walls`` (:class:`HalfSpaces`) with restitution coefficient
-    ``cr`` and feasibility tolerance ``tol`` (m); False when the half-spaces have no common
-    point (then nothing is changed). ``work``: one row of :class:`Scratch`
-    (``floats[32:]`` and ``ints[0:3]`` are used)."""
-    nrm, c, m = walls
-    ws, wi = work
+def respond(nrm, c, m, pos, vel, i, cr, tol, ws, wi):
+    """The joint response for particle i (pos, vel in place) to the m walls nrm . X >= c;
+    False when the half-spaces have no common point (then nothing is changed).
+    ws, wi: scratch (``ws[32:]`` and ``wi[0:3]`` are used)."""
     dim = pos.shape[1]
     b = ws[32:32 + dim]
     p = ws[35:35 + dim]

@@ -11,9 +11,9 @@ normal n = (C - q) / |C - q|, q the face's point nearest to the contact C. That 
 convex, so the tangent plane separates it from everything on its fluid side: a centre
 mirrored to at least r from the plane (Eq. 1) is clear of the face.
 
-The kernels take the faces and their grid as one record with the fields of
-:class:`FaceSet` (a FaceSet, or the :class:`.collision.WallGroup` that holds them), and the
-ends of a path as (x, y, z) tuples (m; z = 0 in 2D).
+The faces and their grid travel as one :class:`FaceSet` (:func:`.collision.face_arrays`);
+the functions here, called per particle, take its arrays one by one (see
+:func:`.collision.reflect_step`).
 """
 
 from __future__ import annotations
@@ -47,15 +47,11 @@ class FaceSet(NamedTuple):
 
 
 @njit(cache=True)
-def near_any_face(faces, a, b, lim):
-    """Whether some face of ``faces`` (the fields of :class:`FaceSet`) may come closer than
-    ``lim`` (m) to the path A -> B (a cheap test: the distance at B minus the path's length)."""
-    verts, lo, inv_cell = faces.verts, faces.lo, faces.inv_cell
-    shape, start, items = faces.shape, faces.start, faces.items
+def near_any_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, b2, lim):
+    """Whether some face may come closer than ``lim`` (m) to the path A -> B (a cheap
+    test: the distance at B minus the path's length)."""
     if verts.shape[0] == 0:
         return False
-    a0, a1, a2 = a
-    b0, b1, b2 = b
     dim = verts.shape[2]
     ln = math.sqrt((b0 - a0) ** 2 + (b1 - a1) ** 2 + (b2 - a2) ** 2)
     x0, x1, y0, y1, z0, z1 = box_cells(lo, inv_cell, shape, dim, a0, a1, a2, b0, b1, b2, lim)
@@ -70,17 +66,12 @@ def near_any_face(faces, a, b, lim):
 
 
 @njit(cache=True)
-def earliest_face(faces, a, b, r, lim, fbest):
-    """(face, t): the face of ``faces`` (the fields of :class:`FaceSet`) with the earliest
-    contact t < ``fbest`` along A -> B for a sphere of radius r (m) among those the path
-    comes closer to than ``lim`` (m); (-1, fbest) if none. t is the fraction of the path."""
-    verts, lo, inv_cell = faces.verts, faces.lo, faces.inv_cell
-    shape, start, items = faces.shape, faces.start, faces.items
+def earliest_face(verts, lo, inv_cell, shape, start, items, a0, a1, a2, b0, b1, b2, r, lim, fbest):
+    """(face, t): the face with the earliest contact t < ``fbest`` along A -> B for a sphere
+    of radius r (m) among those the path comes closer to than ``lim``; (-1, fbest) if none."""
     best = -1
     if verts.shape[0] == 0:
         return best, fbest
-    a0, a1, a2 = a
-    b0, b1, b2 = b
     dim = verts.shape[2]
     ln = math.sqrt((b0 - a0) ** 2 + (b1 - a1) ** 2 + (b2 - a2) ** 2)
     x0, x1, y0, y1, z0, z1 = box_cells(lo, inv_cell, shape, dim, a0, a1, a2, b0, b1, b2, r)
