@@ -1,0 +1,272 @@
+"""Wave flume: the wave height a piston wave maker makes, against Biesel's transfer function.
+
+Reads   RUN/summary.json (the case: water depth, flume length, the piston's sine_translation
+        and the depth gauges), RUN/probes.nc (the depth gauges, from the probes plugin) and,
+        if present, RUN/wall_loads.csv (the force on the piston, from the wall_loads plugin).
+Writes  RUN/wave_flume.png: the free-surface elevation at every gauge with its measuring
+        window shaded, and H/S against kh with Biesel's curve (every RUN given on one plot).
+
+The piston is the first ``[[domain.walls]]`` entry whose motion has a ``sine_translation``
+part: its stroke S is twice the amplitude, its period T gives omega = 2 pi / T, and k
+solves the linear dispersion relation omega^2 = g k tanh(k h) (h the depth of still water,
+the first fluid block's top above the floor). Biesel's first-order transfer function of a
+piston (Biesel & Suquet 1951; Dean & Dalrymple, Water Wave Mechanics for Engineers and
+Scientists, ch. 6) is
+
+    H / S = 2 (cosh 2kh - 1) / (sinh 2kh + 2kh)        (-> kh in shallow water, -> 2 in deep)
+
+Each gauge at a distance x from the piston's face at rest is measured in the window
+
+    t0 = ramp_start + ramp + x / cg + margin T       (the fully ramped waves have arrived)
+    t1 = ramp_start + (2 L - x) / cg                  (the first waves reflected from the far wall,
+                                                       L the face's distance from it, return)
+
+(cg the linear group velocity, t1 also no later than the last sample). The wave height is
+the mean over the whole waves in the window (zero up-crossing to zero up-crossing of the
+elevation less its mean over the window) of crest minus trough. The script prints the
+window, the number of waves, H, H/S measured and Biesel's and the relative error per gauge,
+and, with wall_loads.csv, the mean and the first-harmonic amplitude (a least-squares fit at
+omega) of the horizontal force on the piston after the ramp (N/m in 2D). A path that is not a run of a piston flume:
+one line on stderr, exit status 2.
+
+    python postprocessing/wave_flume.py cases/wave_flume/output
+    python postprocessing/wave_flume.py cases/wave_flume/output cases/wave_flume_kh18/output
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+from runs import RunError, open_run, pyplot, refuse
+
+PROG = Path(__file__).name
+PNG = "wave_flume.png"
+WALL_LOADS_CSV = "wall_loads.csv"
+
+
+# ---------------------------------------------------------------------------- linear theory
+
+
+def wavenumber(omega, h, g=9.81):
+    """k (1/m) solving omega^2 = g k tanh(k h), by bisection on kh in [0, omega^2 h / g + 1]
+    (x tanh x - y changes sign there); omega may be an array."""
+    y = np.asarray(omega, float) ** 2 * h / g
+    lo, hi = np.zeros_like(y), y + 1.0
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        below = mid * np.tanh(mid) < y
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    return 0.5 * (lo + hi) / h
+
+
+def biesel(kh):
+    """Biesel's piston transfer function H/S = 2 (cosh 2kh - 1) / (sinh 2kh + 2kh)."""
+    x = 2.0 * np.asarray(kh, float)
+    return 2.0 * (np.cosh(x) - 1.0) / (np.sinh(x) + x)
+
+
+def group_velocity(k, h, g=9.81):
+    """cg = c/2 (1 + 2kh / sinh 2kh), c = omega / k (m/s)."""
+    kh = k * h
+    c = math.sqrt(g * math.tanh(kh) / k)
+    return 0.5 * c * (1.0 + 2.0 * kh / math.sinh(2.0 * kh))
+
+
+# ---------------------------------------------------------------------------- the run's flume
+
+
+def flume(run) -> dict:
+    """The flume of a run's case: depth h, the piston (face x, stroke S, period T, ramp end),
+    the far wall's x and the depth gauges' x. Raises RunError for anything else."""
+    cfg = run.config
+    if not cfg:
+        raise RunError(f"{run.dir}: no summary.json (expected the output directory of a finished sph run)")
+    dim = cfg.get("case", {}).get("dim")
+    if dim != 2:
+        raise RunError(f"{run.dir}: a {dim}D run (expected a 2D wave flume)")
+    piston = None
+    for k, wall in enumerate(cfg.get("domain", {}).get("walls") or []):
+        for part in wall.get("motion") or []:
+            if part.get("type") == "sine_translation":
+                piston = (k, wall, part)
+                break
+        if piston:
+            break
+    if piston is None:
+        raise RunError(f"{run.dir}: no [[domain.walls]] entry moves with a sine_translation "
+                       f"(expected a piston wave maker)")
+    k, wall, part = piston
+    axis = np.asarray(part["axis"], float)
+    axis = axis / np.linalg.norm(axis)
+    if abs(axis[0]) < 0.999:
+        raise RunError(f"{run.dir}: domain.walls[{k}] moves along {part['axis']} (expected a piston moving along x)")
+    period = part.get("period") or (1.0 / part["frequency"] if part.get("frequency") else None)
+    if wall.get("shape") == "box":
+        face = float(wall["max"][0])
+    elif wall.get("points"):
+        face = float(max(p[0] for p in wall["points"]))
+    else:
+        raise RunError(f"{run.dir}: domain.walls[{k}] is a {wall.get('shape')} (expected a box or a polygon piston)")
+    block = run.first_block()
+    if not block:
+        raise RunError(f"{run.dir}: no fluid block in the case")
+    lo, hi = run.block_extent(block)
+    floor = float(cfg["domain"]["min"][1])
+    gauges = [(d["name"], float(d["point"][0])) for d in (cfg.get("probes") or {}).get("depth") or []]
+    if not gauges:
+        raise RunError(f"{run.dir}: the case has no [[probes.depth]] gauges")
+    g = abs(float(cfg.get("physics", {}).get("gravity", [0.0, -9.81])[1]))
+    return {"h": hi[1] - floor, "face": face, "far": float(cfg["domain"]["max"][0]),
+            "S": 2.0 * abs(float(part["amplitude"])), "T": float(period), "g": g,
+            "ramp_end": float(part.get("ramp_start", 0.0)) + float(part.get("ramp", 0.0)),
+            "ramp_start": float(part.get("ramp_start", 0.0)), "gauges": gauges, "wall": k}
+
+
+def wave_heights(t, eta):
+    """Crest-to-trough heights of the whole waves of ``eta`` (zero up-crossing to zero
+    up-crossing of eta less its mean); [] if fewer than two up-crossings."""
+    e = eta - eta.mean()
+    up = np.flatnonzero((e[:-1] < 0.0) & (e[1:] >= 0.0)) + 1
+    return [float(e[a:b].max() - e[a:b].min()) for a, b in zip(up[:-1], up[1:])]
+
+
+def measure(run, margin=0.0) -> dict:
+    """The flume of ``run`` and, per gauge, its window, waves and H/S."""
+    f = flume(run)
+    data = run.probes()
+    t = data["t"]
+    byname = {p["name"]: p for p in data["probes"] if p["kind"] == "depth"}
+    omega = 2.0 * math.pi / f["T"]
+    k = float(wavenumber(omega, f["h"], f["g"]))
+    kh = k * f["h"]
+    cg = group_velocity(k, f["h"], f["g"])
+    span = f["far"] - f["face"]
+    rows = []
+    for name, xg in f["gauges"]:
+        if name not in byname:
+            raise RunError(f"{run.dir}: probes.nc has no depth gauge {name}")
+        x = xg - f["face"]
+        t0 = f["ramp_end"] + x / cg + margin * f["T"]
+        t1 = min(f["ramp_start"] + (2.0 * span - x) / cg, float(t[-1]))
+        eta = byname[name]["values"] - f["h"]
+        sel = (t >= t0) & (t <= t1)
+        heights = wave_heights(t[sel], eta[sel]) if sel.sum() > 2 else []
+        H = float(np.mean(heights)) if heights else math.nan
+        rows.append({"name": name, "x": x, "t0": t0, "t1": t1, "waves": len(heights), "H": H,
+                     "HS": H / f["S"], "eta": eta})
+    return {**f, "rho0": data["rho0"], "k": k, "kh": kh, "cg": cg, "L": 2.0 * math.pi / k, "biesel": float(biesel(kh)),
+            "t": t, "rows": rows, "dir": run.dir}
+
+
+def paddle_force(run, m) -> dict | None:
+    """Mean and first-harmonic amplitude of the piston's Fx after the ramp, from wall_loads.csv."""
+    path = run.dir / WALL_LOADS_CSV
+    if not path.is_file():
+        return None
+    try:
+        lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+        header = lines[0].strip().split(",")
+        data = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
+    except (OSError, IndexError, ValueError) as err:
+        raise RunError(f"{path}: cannot read the wall loads: {err}") from None
+    col = f"domain.walls[{m['wall']}].motion.Fx"
+    if col not in header:
+        return None
+    t, fx = data[:, 0], data[:, header.index(col)]
+    sel = (t >= m["ramp_end"]) & np.isfinite(fx)
+    if sel.sum() < 4:
+        return None
+    # least squares fit of mean + a cos(omega t) + b sin(omega t): the first harmonic's amplitude
+    # (the reflective impulses make the raw series spiky; half its range overstates the swing)
+    omega = 2.0 * math.pi / m["T"]
+    ts, fs = t[sel], fx[sel]
+    basis = np.column_stack([np.ones_like(ts), np.cos(omega * ts), np.sin(omega * ts)])
+    coef = np.linalg.lstsq(basis, fs, rcond=None)[0]
+    return {"mean": float(coef[0]), "amplitude": float(math.hypot(coef[1], coef[2])),
+            "half_range": float(0.5 * (fs.max() - fs.min())), "from": m["ramp_end"], "to": float(ts[-1]),
+            "hydrostatic": 0.5 * m["rho0"] * m["g"] * m["h"] ** 2}
+
+
+def report(m, force):
+    print(f"{m['dir']}: h = {m['h']:.4g} m, S = {m['S']:.4g} m, T = {m['T']:.4g} s, kh = {m['kh']:.4f}, "
+          f"L = {m['L']:.4g} m, H/L (Biesel) = {m['biesel'] * m['S'] / m['L']:.4f}, cg = {m['cg']:.4g} m/s, "
+          f"piston face to far wall {m['far'] - m['face']:.4g} m")
+    print(f"  Biesel H/S = {m['biesel']:.4f}")
+    print(f"  {'gauge':<8}{'x [m]':>8}{'x/h':>6}{'window [s]':>18}{'waves':>7}{'H [m]':>10}{'H/S':>8}"
+          f"{'Biesel':>8}{'error':>9}")
+    for r in m["rows"]:
+        err = (r["HS"] / m["biesel"] - 1.0) * 100.0
+        window = f"{r['t0']:.2f} - {r['t1']:.2f}"
+        print(f"  {r['name']:<8}{r['x']:>8.3f}{r['x'] / m['h']:>6.1f}{window:>18}{r['waves']:>7}"
+              f"{r['H']:>10.5f}{r['HS']:>8.4f}{m['biesel']:>8.4f}{err:>8.1f}%")
+    good = [r["HS"] for r in m["rows"] if r["waves"]]
+    if good:
+        mean = float(np.mean(good))
+        print(f"  mean over the gauges: H/S = {mean:.4f}, error {(mean / m['biesel'] - 1.0) * 100.0:+.1f}%")
+    if force is not None:
+        print(f"  piston force Fx over t = {force['from']:.2f} - {force['to']:.2f} s: mean {force['mean']:.1f} N/m "
+              f"(still water rho0 g h^2 / 2 = {force['hydrostatic']:.1f}), first-harmonic amplitude "
+              f"{force['amplitude']:.2f} N/m (half the range, spikes included: {force['half_range']:.1f})")
+
+
+def plot(m, all_runs, png):
+    plt = pyplot()
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5), gridspec_kw={"width_ratios": [1.8, 1]})
+    step = 2.5 * max(m["biesel"] * m["S"], 1e-6)
+    for j, r in enumerate(m["rows"]):
+        off = -j * step
+        line, = ax.plot(m["t"], r["eta"] + off, lw=0.9, label=f"{r['name']} (x = {r['x']:.2f} m)")
+        ax.fill_between([r["t0"], r["t1"]], off - 0.45 * step, off + 0.45 * step, color=line.get_color(),
+                        alpha=0.12, lw=0)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("elevation [m] (gauges offset)")
+    ax.set_title(f"kh = {m['kh']:.2f}: elevation at the gauges, measuring windows shaded")
+    ax.legend(fontsize=8, loc="upper left")
+    top = max(2.5, max(x["kh"] for x in all_runs) * 1.2)
+    kh = np.linspace(1e-3, top, 300)
+    bx.plot(kh, biesel(kh), "k-", label="Biesel (linear)")
+    for x in all_runs:
+        for r in x["rows"]:
+            if r["waves"]:
+                bx.plot(x["kh"], r["HS"], "o", ms=5, alpha=0.8)
+        bx.plot(x["kh"], x["biesel"], "kx", ms=8)
+    bx.set_xlabel("kh")
+    bx.set_ylabel("H / S")
+    bx.set_title("piston transfer function (dots: gauges)")
+    bx.grid(alpha=0.3)
+    bx.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("run", nargs="+", help="a run's output directory (holding summary.json and probes.nc)")
+    ap.add_argument("--margin", type=float, default=0.0, metavar="PERIODS",
+                    help="start each window this many wave periods later (default 0)")
+    ap.add_argument("--no-plot", action="store_true", help="print the table only")
+    args = ap.parse_args(argv)
+    if not args.margin >= 0.0:
+        return refuse(PROG, ValueError(f"--margin must be >= 0, got {args.margin}"))
+    try:
+        runs = [open_run(p) for p in args.run]
+        measured = [measure(r, args.margin) for r in runs]
+        for r, m in zip(runs, measured):
+            report(m, paddle_force(r, m))
+    except RunError as err:
+        return refuse(PROG, err)
+    if not args.no_plot:
+        for m in measured:
+            png = m["dir"] / PNG
+            plot(m, measured, png)
+            print(f"wrote {png}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
