@@ -28,11 +28,9 @@ tank mirror the fluid where they are when the forces are evaluated, and the imag
 the wall's velocity and acceleration (:mod:`.mirror`: free slip and no slip relative to
 the wall, the hydrostatic correction with g - a_w after Adami, Hu & Adams 2012, Eq. 27).
 A case with finite wall faces is refused, moving or not (the plugin mirrors across planes
-only). The leapfrog evaluates the end-of-step rates before the core advances ``ctx.t``;
-the plugin therefore takes the time of a force evaluation from its own
-``sph_after_integrate`` (t + dt between the free motion and the end of the step, ``ctx.t``
-otherwise), so that the planes are where the particles are in time. A case whose walls do
-not move takes the fixed-wall path unchanged.
+only). A force evaluation sees the planes at ``ctx.t``, the time the particles are at
+(the core advances its clock before the leapfrog's end-of-step rates). A case whose walls
+do not move takes the fixed-wall path unchanged.
 
 Run summary: ``ghosts_last`` (ghosts of the last force evaluation), ``ghosts_max``,
 ``ghost_reallocations`` (buffer growths).
@@ -57,9 +55,6 @@ class GhostPlugin:
         self.mirror: MirrorImages | None = None
         # the moving tank's group (sphcore.geometry.motion.MovingGroup), None: fixed planes
         self.tank = None
-        # (step, t, t + dt) of the last free motion: the particles are at t + dt until the
-        # core advances its clock (see the module docstring)
-        self._moved: tuple | None = None
 
     @hookimpl
     def sph_options(self):
@@ -99,28 +94,12 @@ class GhostPlugin:
         self.mirror = MirrorImages(planes.normals, planes.offsets, free_slip=cfg["wall"] == "free_slip",
                                    hydrostatic=cfg["hydrostatic"])
         self.tank = next((g for g in getattr(case, "moving", ()) if g.planes), None)
-        self._moved = None
 
     @hookimpl
     def sph_moving_walls(self):
         # the planes of a moving tank mirror where they are, with the wall's velocity and
         # acceleration (module docstring); finite faces are refused in sph_configure
         return True
-
-    @hookimpl
-    def sph_after_integrate(self, ctx, dt):
-        # only records the time the particles are at now; moves nothing
-        if self.tank is not None:
-            self._moved = (ctx.step, ctx.t, ctx.t + dt)
-
-    def evaluation_time(self, ctx) -> float:
-        """The time (s) of the particles a force evaluation sees: t + dt between a step's
-        free motion and the core's clock update (the leapfrog's end-of-step rates),
-        ``ctx.t`` otherwise."""
-        moved = self._moved
-        if moved is not None and moved[0] == ctx.step and moved[1] == ctx.t:
-            return moved[2]
-        return ctx.t
 
     @hookimpl
     def sph_extra_sources(self, ctx):
@@ -131,7 +110,7 @@ class GhostPlugin:
         if self.tank is None:
             src = self.mirror.generate(fluid, st.kind, ctx.params)
         else:
-            t = self.evaluation_time(ctx)
+            t = ctx.t
             planes = ctx.planes_at(t)
             src = self.mirror.generate(fluid, st.kind, ctx.params, walls=PlaneGroup(planes.normals, planes.offsets),
                                        motion=WallMotion.of(self.tank.motion.pose(t)))

@@ -14,7 +14,10 @@ Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
                       at any other time; also ``ctx.walls``, the name earlier versions used).
 ``ctx.case``          :class:`sphcore.case.model.Case`, the validated case: ``ctx.case.config[table]``
                       holds a plugin's options with defaults filled in.
-``ctx.t``             simulated time (s) at the start of the next step.
+``ctx.t``             simulated time (s) of the particles: the start of the step in
+                      ``sph_after_integrate`` (whose ``dt`` says where it ends), the end of
+                      the step from the rates that follow it on (the leapfrog's end-of-step
+                      forces see moving walls where the particles are).
 ``ctx.step``          steps completed.
 ``ctx.dt``            the last step (s); 0 before the first.
 ``ctx.t_end``         simulated time the run goes to (s).

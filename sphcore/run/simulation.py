@@ -179,10 +179,12 @@ class Simulation:
         integ, st = self.integrator, self.state
         integ.free_motion(ctx.dt)
         self.hooks.sph_after_integrate(ctx=ctx, pos0=integ.pos0, pos=st.pos, vel=st.vel, acc=integ.acc, dt=ctx.dt)
+        # the particles are at t + dt now: so is the clock, so that the rates at the end of
+        # the step (the leapfrog's) see moving walls where they are then
+        ctx.t += ctx.dt
         self.update_pressure()
         if integ.finish(ctx.dt):  # the density changed again: its pressure too
             self.update_pressure()
-        ctx.t += ctx.dt
         ctx.step += 1
         if self.checks_due.due(self.run.clock):
             self.check()
