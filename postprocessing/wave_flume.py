@@ -25,9 +25,11 @@ Each gauge at a distance x from the piston's face at rest is measured in the win
 the mean over the whole waves in the window (zero up-crossing to zero up-crossing of the
 elevation less its mean over the window) of crest minus trough. The script prints the
 window, the number of waves, H, H/S measured and Biesel's and the relative error per gauge,
-and, with wall_loads.csv, the mean and the first-harmonic amplitude (a least-squares fit at
-omega) of the horizontal force on the piston after the ramp (N/m in 2D). A path that is not a run of a piston flume:
-one line on stderr, exit status 2.
+the decay of H along the flume (an exponential fitted over the gauges, with its value
+extrapolated back to the piston: a diagnostic of the damping on the way, not theory), and,
+with wall_loads.csv, the mean and the first-harmonic amplitude (a least-squares fit at
+omega) of the horizontal force on the piston after the ramp (N/m in 2D). A path that is
+not a run of a piston flume: one line on stderr, exit status 2.
 
     python postprocessing/wave_flume.py cases/wave_flume/output
     python postprocessing/wave_flume.py cases/wave_flume/output cases/wave_flume_kh18/output
@@ -191,6 +193,18 @@ def paddle_force(run, m) -> dict | None:
             "hydrostatic": 0.5 * m["rho0"] * m["g"] * m["h"] ** 2}
 
 
+def decay(m):
+    """(rate, H/S at x = 0) of H/S = a exp(-rate x) fitted over the gauges (least squares on
+    its logarithm); None with fewer than two gauges measured. A diagnostic of the damping of
+    the waves on their way, not part of linear theory."""
+    pts = [(r["x"], r["HS"]) for r in m["rows"] if r["waves"] and r["HS"] > 0.0]
+    if len(pts) < 2 or len({x for x, _ in pts}) < 2:
+        return None
+    x, y = np.array(pts).T
+    slope, icpt = np.polyfit(x, np.log(y), 1)
+    return float(-slope), float(math.exp(icpt))
+
+
 def report(m, force):
     print(f"{m['dir']}: h = {m['h']:.4g} m, S = {m['S']:.4g} m, T = {m['T']:.4g} s, kh = {m['kh']:.4f}, "
           f"L = {m['L']:.4g} m, H/L (Biesel) = {m['biesel'] * m['S'] / m['L']:.4f}, cg = {m['cg']:.4g} m/s, "
@@ -207,6 +221,13 @@ def report(m, force):
     if good:
         mean = float(np.mean(good))
         print(f"  mean over the gauges: H/S = {mean:.4f}, error {(mean / m['biesel'] - 1.0) * 100.0:+.1f}%")
+    fit = decay(m)
+    if fit is not None:
+        rate, at0 = fit
+        print(f"  decay along the flume (exp fit over the gauges): H loses {(1.0 - math.exp(-rate)) * 100.0:.1f}% "
+              f"per metre, "
+              f"{(1.0 - math.exp(-rate * m['L'])) * 100.0:.1f}% per wavelength; H/S extrapolated to the piston "
+              f"{at0:.4f} ({(at0 / m['biesel'] - 1.0) * 100.0:+.1f}% from Biesel)")
     if force is not None:
         print(f"  piston force Fx over t = {force['from']:.2f} - {force['to']:.2f} s: mean {force['mean']:.1f} N/m "
               f"(still water rho0 g h^2 / 2 = {force['hydrostatic']:.1f}), first-harmonic amplitude "
@@ -219,8 +240,8 @@ def plot(m, all_runs, png):
     step = 2.5 * max(m["biesel"] * m["S"], 1e-6)
     for j, r in enumerate(m["rows"]):
         off = -j * step
-        line, = ax.plot(m["t"], r["eta"] + off, lw=0.9, label=f"{r['name']} (x = {r['x']:.2f} m)")
-        ax.fill_between([r["t0"], r["t1"]], off - 0.45 * step, off + 0.45 * step, color=line.get_color(),
+        ax.plot(m["t"], r["eta"] + off, lw=0.9, color=f"C{j % 10}", label=f"{r['name']} (x = {r['x']:.2f} m)")
+        ax.fill_between([r["t0"], r["t1"]], off - 0.45 * step, off + 0.45 * step, color=f"C{j % 10}",
                         alpha=0.12, lw=0)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("elevation [m] (gauges offset)")
@@ -230,13 +251,13 @@ def plot(m, all_runs, png):
     kh = np.linspace(1e-3, top, 300)
     bx.plot(kh, biesel(kh), "k-", label="Biesel (linear)")
     for x in all_runs:
-        for r in x["rows"]:
+        for j, r in enumerate(x["rows"]):
             if r["waves"]:
-                bx.plot(x["kh"], r["HS"], "o", ms=5, alpha=0.8)
+                bx.plot(x["kh"], r["HS"], "o", ms=5, alpha=0.8, color=f"C{j % 10}")
         bx.plot(x["kh"], x["biesel"], "kx", ms=8)
     bx.set_xlabel("kh")
     bx.set_ylabel("H / S")
-    bx.set_title("piston transfer function (dots: gauges)")
+    bx.set_title("piston transfer function (dots: gauges, colours as left)")
     bx.grid(alpha=0.3)
     bx.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
