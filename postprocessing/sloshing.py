@@ -1,0 +1,417 @@
+"""Sloshing: the first mode of a tank against linear theory, and a rolled tank's wall
+pressure against the SPHERIC benchmark's record.
+
+Reads   RUN/probes.nc, written by the probes plugin (RUN: a run's output directory), its
+        summary.json (the tank's size), and for ``roll`` the experiment's record.
+Writes  RUN/sloshing_free.png (``free``: the gauges' surface elevation, the amplitudes
+        fitted) or RUN/sloshing_roll.png (``roll``: sensor 1 over the experiment's two
+        series), and prints a table.
+
+``free RUN``: the depth gauges of a run (cases/sloshing_free) after the excitation stops
+(``--after``, s). For each gauge and for the antisymmetric part of the two outermost
+gauges, (left - right) / 2, which holds the odd modes only and not the slow drift of the mean
+level that both gauges share: the surface elevation eta = depth less a straight line
+fitted to it. Two measures: (1) the zero crossings of eta smoothed over T1/8 (linear
+interpolation) give the period (a straight-line fit of the crossing times against their
+count: T / 2 per crossing), the largest |eta| between successive crossings the amplitudes,
+and a straight-line fit of their logarithms the logarithmic decrement delta per period,
+hence the damping ratio zeta = delta / sqrt(4 pi^2 + delta^2); (2) a least-squares fit of
+a damped sine over a straight line to eta itself (period, zeta, amplitude, and the rms of
+what it leaves: the ripple). The fit's period is compared with linear theory,
+omega^2 = g k tanh(k h), k = pi / L, L the tank's length and h the water depth (from the
+case, or --length and --depth). Writes RUN/sloshing_free.png.
+
+``roll RUN``: the pressure sensor (``--probe``, default the first pressure probe) of a run
+of cases/sloshing_roll against the experiment's record (``--reference``, default
+cases/sloshing_roll/reference/EXP_Pressure_SPHERIC_Benchmark#10.txt). The record's rows
+alternate between two series, each with its own increasing times: an upper and a lower one
+(the odd rows lie above the even rows in 99.9 % of the pairs; they read as the maximum and
+the minimum of the raw signal over windows of about 5 ms, see
+cases/sloshing_roll/reference/README.md). They are read apart; the experiment's peak is the
+upper series' (the raw signal's maximum), and the curve compared sample by sample is the
+midline, the mean of the two interpolated linearly at the run's sample times. Prints the
+time and value of the largest pressure of simulation and experiment in each roll period
+from T to 5 T (--period, s; the first four impact peaks), and the mean absolute error
+against the midline over the first four periods, 0 to 4 T (within the run's own samples),
+with the mean half-distance between the two series for scale. ``--shift`` (s) delays the simulation's record before the
+comparison (the measured roll lags the prescribed sinusoid). Writes RUN/sloshing_roll.png.
+
+``theory --length L --depth H``: the linear natural periods of the first modes.
+
+A missing directory, a run without probes or a reference that cannot be read: one line on
+stderr, exit status 2.
+
+    python postprocessing/sloshing.py free cases/sloshing_free/output --after 3.957
+    python postprocessing/sloshing.py roll cases/sloshing_roll/output
+    python postprocessing/sloshing.py theory --length 1.0 --depth 0.3
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+from runs import RunError, open_run, pyplot, refuse
+
+PROG = Path(__file__).name
+FREE_PNG = "sloshing_free.png"
+ROLL_PNG = "sloshing_roll.png"
+G = 9.81
+REFERENCE = Path(__file__).resolve().parent.parent / "cases" / "sloshing_roll" / "reference" / \
+    "EXP_Pressure_SPHERIC_Benchmark#10.txt"
+ROLL_PERIOD = 1.63  # s, SPHERIC test 10
+SMOOTH_PEAK = 0.005  # s: the simulation's peaks also from its record averaged over this long
+
+
+# ----------------------------------------------------------------------------- theory
+
+def linear_omega(length: float, depth: float, g: float = G, mode: int = 1) -> float:
+    """Natural angular frequency (rad/s) of sloshing mode ``mode`` in a 2D rectangular
+    tank, linear theory: omega^2 = g k tanh(k h), k = mode pi / L."""
+    if not (length > 0 and depth > 0 and g > 0 and mode >= 1):
+        raise ValueError("length, depth and g must be > 0 and mode >= 1")
+    k = mode * math.pi / length
+    return math.sqrt(g * k * math.tanh(k * depth))
+
+
+def linear_period(length: float, depth: float, g: float = G, mode: int = 1) -> float:
+    """Natural period (s) of sloshing mode ``mode``: 2 pi / :func:`linear_omega`."""
+    return 2.0 * math.pi / linear_omega(length, depth, g, mode)
+
+
+# ----------------------------------------------------------------------------- free decay
+
+def crossings(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Times at which ``y`` changes sign (linear interpolation between samples)."""
+    s = np.signbit(y)
+    k = np.flatnonzero(s[1:] != s[:-1])
+    return t[k] - y[k] * (t[k + 1] - t[k]) / (y[k + 1] - y[k])
+
+
+def smooth(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
+    """Centred moving average of ``y`` over ``width`` (s; samples about evenly spaced): takes
+    out the high-frequency ripple that would add zero crossings, without moving them."""
+    if len(t) < 3:
+        return y
+    n = int(round(width / float(np.median(np.diff(t)))))
+    if n < 2:
+        return y
+    n += 1 - n % 2  # odd: centred
+    pad = np.pad(y, n // 2, mode="edge")
+    return np.convolve(pad, np.ones(n) / n, mode="valid")
+
+
+def decay(t: np.ndarray, eta: np.ndarray) -> dict:
+    """Period, amplitudes and damping of an oscillation ``eta`` about zero: {period (s),
+    crossings, amplitudes (m, the largest |eta| between successive crossings), delta (the
+    logarithmic decrement per period), zeta}; NaN where the record is too short (fewer than
+    three crossings for the period, two amplitudes for the damping)."""
+    tc = crossings(t, eta)
+    out = {"period": math.nan, "crossings": len(tc), "amplitudes": np.empty(0), "times": np.empty(0),
+           "delta": math.nan, "zeta": math.nan}
+    if len(tc) >= 3:
+        slope = np.polyfit(np.arange(len(tc)), tc, 1)[0]
+        out["period"] = 2.0 * slope
+    amps, times = [], []
+    for a, b in zip(tc[:-1], tc[1:]):
+        inside = (t > a) & (t < b)
+        if inside.any():
+            k = np.flatnonzero(inside)[np.argmax(np.abs(eta[inside]))]
+            amps.append(abs(eta[k]))
+            times.append(t[k])
+    amps, times = np.asarray(amps), np.asarray(times)
+    out["amplitudes"], out["times"] = amps, times
+    if len(amps) >= 2 and np.all(amps > 0):
+        # half periods between successive amplitudes: delta per period = -2 * slope
+        slope = np.polyfit(np.arange(len(amps)), np.log(amps), 1)[0]
+        delta = -2.0 * slope
+        out["delta"] = delta
+        out["zeta"] = delta / math.sqrt(4.0 * math.pi ** 2 + delta ** 2)
+    return out
+
+
+def fit_damped(t: np.ndarray, eta: np.ndarray, period: float) -> dict:
+    """Least-squares fit of eta = exp(-s (t - t0)) (a cos w (t - t0) + b sin w (t - t0))
+    + c + d (t - t0), t0 = t[0]: linear in a, b, c, d for given (w, s), which a grid search
+    refined four times finds near w = 2 pi / ``period``. Returns {period (2 pi / w, s), zeta
+    (s / sqrt(s^2 + w^2)), amplitude (m, at t0), rms (m, of the residual)}; NaN where the
+    record is too short or ``period`` is not finite. The straight line c + d t takes up a
+    slow drift of the mean level, the fit's smoothing the high-frequency ripple."""
+    out = {"period": math.nan, "zeta": math.nan, "amplitude": math.nan, "rms": math.nan}
+    if not np.isfinite(period) or len(t) < 8 or t[-1] - t[0] < period:
+        return out
+    tau = t - t[0]
+
+    def solve(w, s):
+        e = np.exp(-s * tau)
+        m = np.column_stack([e * np.cos(w * tau), e * np.sin(w * tau), np.ones_like(tau), tau])
+        coef, *_ = np.linalg.lstsq(m, eta, rcond=None)
+        r = eta - m @ coef
+        return float(r @ r), coef
+
+    w0 = 2.0 * math.pi / period
+    w_lo, w_hi, s_lo, s_hi = 0.8 * w0, 1.2 * w0, 0.0, 0.2 * w0
+    best = None
+    for _ in range(5):
+        for w in np.linspace(w_lo, w_hi, 21):
+            for s in np.linspace(s_lo, s_hi, 21):
+                cost, coef = solve(w, s)
+                if best is None or cost < best[0]:
+                    best = (cost, w, s, coef)
+        _, w, s, _ = best
+        dw, ds = (w_hi - w_lo) / 10.0, (s_hi - s_lo) / 10.0
+        w_lo, w_hi, s_lo, s_hi = w - dw, w + dw, max(0.0, s - ds), s + ds
+    cost, w, s, coef = best
+    out.update(period=2.0 * math.pi / w, zeta=s / math.hypot(s, w), amplitude=float(math.hypot(coef[0], coef[1])),
+               rms=math.sqrt(cost / len(t)))
+    return out
+
+
+def tank_size(config: dict) -> tuple[float | None, float | None]:
+    """(length along x, water depth) of a run's case: the domain's x extent and the first
+    fluid block's height above the floor; None where the case does not say."""
+    dom = config.get("domain") or {}
+    blocks = [b for b in config.get("blocks", []) if b.get("kind", "fluid") == "fluid"]
+    length = depth = None
+    if dom.get("min") is not None and dom.get("max") is not None:
+        length = float(dom["max"][0]) - float(dom["min"][0])
+    if blocks and blocks[0].get("max") is not None:
+        floor = float(dom["min"][1]) if dom.get("min") is not None else float(blocks[0]["min"][1])
+        depth = float(blocks[0]["max"][1]) - floor
+    return length, depth
+
+
+def _fmt(x, spec=".4f"):
+    return "n/a" if x is None or not np.isfinite(x) else format(x, spec)
+
+
+def free(args) -> int:
+    run = open_run(args.run)
+    data = run.probes()
+    t_all = data["t"]
+    gauges = [p for p in data["probes"] if p["kind"] == "depth"]
+    if not gauges:
+        raise RunError(f"{run.dir}: no depth gauge among the probes (expected [[probes.depth]] near the end walls)")
+    length, depth = tank_size(run.config)
+    length = args.length if args.length is not None else length
+    depth = args.depth if args.depth is not None else depth
+    if length is None or depth is None:
+        raise RunError(f"{run.dir}: the case gives no tank length or water depth: pass --length and --depth")
+    g = float(np.linalg.norm(run.config.get("physics", {}).get("gravity", [0.0, -G])[:2])) or G
+    t_theory = linear_period(length, depth, g)
+    keep = (t_all >= args.after) & (t_all <= (args.until if args.until is not None else np.inf))
+    t = t_all[keep]
+    series = [(p["name"], p["values"][keep]) for p in gauges]
+    if len(gauges) >= 2:
+        # gauges ordered along x by name order in the case: the first and the last
+        series.append((f"({gauges[0]['name']} - {gauges[-1]['name']})/2",
+                       0.5 * (gauges[0]["values"][keep] - gauges[-1]["values"][keep])))
+    print(f"tank L = {length:g} m, water h = {depth:g} m, g = {g:g} m/s^2: linear theory "
+          f"omega^2 = g k tanh(k h), k = pi/L: T1 = {t_theory:.4f} s")
+    print(f"free decay from t = {t[0] if len(t) else args.after:g} s to {t[-1] if len(t) else math.nan:g} s "
+          f"({len(t)} samples)")
+    if len(t) > 1:
+        level = np.mean([p["values"] for p in gauges], axis=0)
+        drift = np.polyfit(t, level[keep], 1)[0]
+        seen = float(level[keep].mean())
+        print(f"the gauges' mean level: {level[0]:.4f} m at t = {t_all[0]:g} s, {seen:.4f} m over the decay "
+              f"(drifting {1e3 * drift:+.2f} mm/s); linear theory at {seen:.4f} m: "
+              f"T1 = {linear_period(length, seen, g):.4f} s")
+    print("zero crossings (of the record smoothed over T1/8): T from their times, zeta from the logarithmic "
+          "decrement of the peaks between them; fit: a damped sine over a straight line, to the record itself")
+    print(f"{'gauge':<22} {'crossings':>9} {'T [s]':>8} {'zeta':>8} | {'fit T [s]':>9} {'T/T1-1':>8} {'zeta':>8} "
+          f"{'a0 [mm]':>8} {'rms [mm]':>8}")
+    results = []
+    for name, v in series:
+        if len(v) > 1:
+            eta = v - np.polyval(np.polyfit(t, v, 1), t)  # without the drift of the mean level
+            r = decay(t, smooth(t, eta, t_theory / 8.0))
+        else:
+            eta, r = v, decay(np.zeros(1), np.zeros(1))
+        f = fit_damped(t, eta, r["period"])
+        err = f["period"] / t_theory - 1.0
+        print(f"{name:<22} {r['crossings']:>9d} {_fmt(r['period']):>8} {_fmt(r['zeta'], '.4f'):>8} | "
+              f"{_fmt(f['period']):>9} {_fmt(100 * err, '+.2f') + '%':>8} {_fmt(f['zeta'], '.4f'):>8} "
+              f"{_fmt(1e3 * f['amplitude'], '.2f'):>8} {_fmt(1e3 * f['rms'], '.2f'):>8}")
+        results.append((name, eta, r, f))
+    if not args.no_plot:
+        plt = pyplot()
+        fig, ax = plt.subplots(figsize=(8, 4))
+        for p in gauges:
+            ax.plot(t_all, 1e3 * (p["values"] - (p["values"][keep].mean() if keep.any() else 0.0)), lw=0.8,
+                    label=p["name"])
+        name, eta, r, f = results[-1]
+        if len(t):
+            ax.plot(t, 1e3 * eta, "k-", lw=0.8, label=f"{name}, without its drift")
+        if len(r["times"]):
+            ax.plot(r["times"], 1e3 * r["amplitudes"], "k.", ms=4, label=f"|{name}| peaks")
+        ax.axvline(args.after, color="0.6", ls="--", lw=0.8)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("surface elevation [mm]")
+        ax.set_title(f"{name}: T = {_fmt(f['period'])} s (linear theory {t_theory:.4f} s), "
+                     f"zeta = {_fmt(f['zeta'], '.4f')}")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        png = run.dir / FREE_PNG
+        fig.savefig(png, dpi=120)
+        plt.close(fig)
+        print(f"wrote {png}")
+    return 0
+
+
+# ----------------------------------------------------------------------------- roll
+
+def read_reference(path: Path) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """The two series of the SPHERIC test 10 pressure record, (upper, lower): the (t, p)
+    of the odd and of the even data rows, each sorted by time, the one with the larger mean
+    first. Lines that are not two numbers (the address and the header) are skipped."""
+    try:
+        text = Path(path).read_text(encoding="utf-8", errors="strict")
+    except (OSError, UnicodeDecodeError) as err:
+        raise RunError(f"{path}: cannot read the reference record: {err}") from None
+    rows = []
+    for line in text.splitlines():
+        f = line.split()
+        if len(f) != 2:
+            continue
+        try:
+            rows.append((float(f[0]), float(f[1])))
+        except ValueError:
+            continue
+    if len(rows) < 4:
+        raise RunError(f"{path}: expected rows of time and pressure, found {len(rows)}")
+    data = np.asarray(rows)
+    out = []
+    for part in (data[0::2], data[1::2]):
+        order = np.argsort(part[:, 0], kind="stable")
+        out.append((part[order, 0], part[order, 1]))
+    if out[1][1].mean() > out[0][1].mean():
+        out.reverse()
+    return out[0], out[1]
+
+
+def window_peaks(t, p, period, first=1, count=4):
+    """(time, value) of the largest ``p`` in each window [k T, (k + 1) T), k = first ...
+    first + count - 1; (nan, nan) for a window the record does not reach."""
+    out = []
+    for k in range(first, first + count):
+        inside = (t >= k * period) & (t < (k + 1) * period)
+        if inside.any():
+            i = np.flatnonzero(inside)[np.argmax(p[inside])]
+            out.append((float(t[i]), float(p[i])))
+        else:
+            out.append((math.nan, math.nan))
+    return out
+
+
+def roll(args) -> int:
+    run = open_run(args.run)
+    data = run.probes()
+    pressure = [p for p in data["probes"] if p["kind"] == "pressure"]
+    if args.probe is not None:
+        pressure = [p for p in pressure if p["name"] == args.probe]
+    if not pressure:
+        raise RunError(f"{run.dir}: no pressure probe" + (f" named {args.probe!r}" if args.probe else ""))
+    probe = pressure[0]
+    t_sim, p_sim = data["t"] + args.shift, np.asarray(probe["values"], float)
+    (ta, pa), (tb, pb) = read_reference(args.reference)
+    T = args.period
+    exp_a = np.interp(t_sim, ta, pa, left=np.nan, right=np.nan)
+    exp_b = np.interp(t_sim, tb, pb, left=np.nan, right=np.nan)
+    exp = 0.5 * (exp_a + exp_b)
+    # the experiment's mean on its own fine grid, for its peaks
+    grid = np.union1d(ta, tb)
+    exp_grid = 0.5 * (np.interp(grid, ta, pa) + np.interp(grid, tb, pb))
+    sim_peaks = window_peaks(t_sim, p_sim, T)
+    smooth_peaks = window_peaks(t_sim, smooth(t_sim, p_sim, SMOOTH_PEAK), T)
+    exp_peaks = window_peaks(ta, pa, T)
+    mid_peaks = window_peaks(grid, exp_grid, T)
+    print(f"sensor {probe['name']!r} against {Path(args.reference).name}, roll period T = {T:g} s"
+          + (f", simulation delayed by {args.shift:g} s" if args.shift else ""))
+    print(f"p_sim: the largest sample; 5 ms: the largest of the record averaged over {1e3 * SMOOTH_PEAK:g} ms; "
+          "p_exp: the upper series' largest; midline: the largest of the two series' mean")
+    print(f"{'peak':>4} {'window [s]':>11} {'t_sim':>7} {'p_sim [Pa]':>10} {'5 ms':>6} {'t_exp':>7} "
+          f"{'p_exp [Pa]':>10} {'midline':>8} {'dt [s]':>7} {'p_sim/p_exp':>11}")
+    for k, ((ts, ps), (_, pq), (te, pe), (_, pm)) in enumerate(zip(sim_peaks, smooth_peaks, exp_peaks,
+                                                                   mid_peaks), 1):
+        lo, hi = k * T, (k + 1) * T
+        print(f"{k:>4} {f'{lo:.2f}-{hi:.2f}':>11} {_fmt(ts, '.3f'):>7} {_fmt(ps, '.0f'):>10} {_fmt(pq, '.0f'):>6} "
+              f"{_fmt(te, '.3f'):>7} {_fmt(pe, '.0f'):>10} {_fmt(pm, '.0f'):>8} {_fmt(ts - te, '+.3f'):>7} "
+              f"{_fmt(ps / pe if pe else math.nan, '.2f'):>11}"
+              + (" (the run ends inside this window)" if np.isfinite(ts) and t_sim[-1] < hi else ""))
+    window = (t_sim >= 0.0) & (t_sim <= 4 * T) & np.isfinite(exp)
+    mae = float(np.mean(np.abs(p_sim[window] - exp[window]))) if window.any() else math.nan
+    spread = float(np.mean(0.5 * np.abs(exp_a[window] - exp_b[window]))) if window.any() else math.nan
+    span = (t_sim[window][0], t_sim[window][-1]) if window.any() else (math.nan, math.nan)
+    print(f"mean absolute error, t = {_fmt(span[0], '.3f')} to {_fmt(span[1], '.3f')} s (first four periods "
+          f"within the run): {_fmt(mae, '.1f')} Pa against the midline; the experiment's upper and lower series lie "
+          f"{_fmt(spread, '.1f')} Pa from it on average")
+    if not args.no_plot:
+        plt = pyplot()
+        fig, ax = plt.subplots(figsize=(9, 4))
+        ax.plot(ta, pa, "-", color="0.75", lw=0.6, label="experiment, upper series")
+        ax.plot(tb, pb, "-", color="0.55", lw=0.6, label="experiment, lower series")
+        ax.plot(t_sim, p_sim, "C0-", lw=0.9, label=f"sphcore {probe['name']}")
+        for ts, ps in sim_peaks:
+            if np.isfinite(ts):
+                ax.plot(ts, ps, "C0o", ms=4)
+        for te, pe in exp_peaks:
+            if np.isfinite(te):
+                ax.plot(te, pe, "ks", ms=4)
+        ax.set_xlim(0, max(t_sim[-1] if len(t_sim) else 0.0, 5 * T))
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("pressure [Pa]")
+        ax.set_title(f"SPHERIC test 10, sensor 1: MAE (0-4T) = {_fmt(mae, '.0f')} Pa")
+        ax.legend(fontsize=8, loc="upper left")
+        fig.tight_layout()
+        png = run.dir / ROLL_PNG
+        fig.savefig(png, dpi=120)
+        plt.close(fig)
+        print(f"wrote {png}")
+    return 0
+
+
+def theory(args) -> int:
+    print(f"tank L = {args.length:g} m, water h = {args.depth:g} m, g = {args.g:g} m/s^2")
+    print(f"{'mode':>4} {'omega [rad/s]':>14} {'T [s]':>8}")
+    for n in range(1, args.modes + 1):
+        w = linear_omega(args.length, args.depth, args.g, n)
+        print(f"{n:>4} {w:>14.4f} {2 * math.pi / w:>8.4f}")
+    return 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="command", required=True)
+    f = sub.add_parser("free", help="first sloshing mode's period and damping from the depth gauges")
+    f.add_argument("run", help="the run's output directory")
+    f.add_argument("--after", type=float, default=0.0, help="s: analyse the gauges from this time on (the end of "
+                   "the excitation; cases/sloshing_free: 3.957)")
+    f.add_argument("--until", type=float, default=None, help="s: and up to this time (default: the end of the run)")
+    f.add_argument("--length", type=float, default=None, help="m: tank length (default: the case's domain)")
+    f.add_argument("--depth", type=float, default=None, help="m: water depth (default: the case's fluid block)")
+    f.add_argument("--no-plot", action="store_true", help="print the table only")
+    r = sub.add_parser("roll", help="sensor 1 of the SPHERIC sloshing benchmark against the experiment")
+    r.add_argument("run", help="the run's output directory")
+    r.add_argument("--reference", type=Path, default=REFERENCE, help="the experiment's pressure record")
+    r.add_argument("--probe", default=None, help="pressure probe name (default: the first)")
+    r.add_argument("--period", type=float, default=ROLL_PERIOD, help="s: roll period (default 1.63)")
+    r.add_argument("--shift", type=float, default=0.0, help="s: delay the simulation's record by this much")
+    r.add_argument("--no-plot", action="store_true", help="print the table only")
+    th = sub.add_parser("theory", help="linear natural periods of a rectangular tank")
+    th.add_argument("--length", type=float, required=True, help="m")
+    th.add_argument("--depth", type=float, required=True, help="m")
+    th.add_argument("--g", type=float, default=G, help="m/s^2 (default 9.81)")
+    th.add_argument("--modes", type=int, default=3, help="how many modes (default 3)")
+    args = ap.parse_args(argv)
+    try:
+        return {"free": free, "roll": roll, "theory": theory}[args.command](args)
+    except (RunError, ValueError) as err:
+        return refuse(PROG, err)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
