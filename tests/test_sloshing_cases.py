@@ -151,7 +151,7 @@ def test_help_and_refusals(tmp_path):
 
 @pytest.mark.slow
 def test_the_free_slosh_has_the_linear_period(tmp_path):
-    """The shipped case (about 2 minutes on two idle cores): the period within 2 % of linear
+    """The shipped case (about 2.5 minutes on two cores): the period within 2 % of linear
     theory at the nominal depth (the README's run: -1.9 %)."""
     from sphcore.run import runner
 
