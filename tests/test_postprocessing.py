@@ -18,7 +18,8 @@ from sphcore.testing import case_with, run_case
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTS = ROOT / "postprocessing"
-TOOLKIT = ["wavefront.py", "pressure_profile.py", "probes.py", "spheric_test2.py", "peer_series.py"]
+TOOLKIT = ["wavefront.py", "pressure_profile.py", "probes.py", "spheric_test2.py", "peer_series.py", "sloshing.py",
+           "wave_flume.py"]
 STUDIES = sorted(p.relative_to(ROOT) for p in (ROOT / "validation").rglob("*.py"))
 RHO_G = 1000.0 * 9.81
 
