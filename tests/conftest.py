@@ -1,7 +1,8 @@
 """Shared helpers for the core tests: write a case directory, build a Simulation, step it.
 
-Cases are written as TOML text into pytest's ``tmp_path``; nothing is written under the
-repository. Plugins are never selected unless a test says so (``[plugins] use = []``).
+Cases (dicts: core_cases.py, sphcore.testing.case_with) are written into pytest's
+``tmp_path``; nothing is written under the repository. Plugins are never selected unless a
+test says so (``[plugins] use = []``).
 """
 
 from __future__ import annotations
@@ -13,13 +14,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from core_cases import good
 from hypothesis import HealthCheck, settings
 
 from sphcore.jit import prepare
 from sphcore.run import runner
 from sphcore.run.build import build
 from sphcore.run.simulation import Simulation
-from sphcore.testing import write_case  # noqa: F401  (the tests import it from here)
+from sphcore.testing import case_toml, write_case  # the tests import write_case from here
 
 # Hypothesis: CI draws the same examples on every run (derandomised, no example database),
 # and with no timing-based check (deadline, too_slow), so a submission is never failed by a
@@ -48,28 +50,8 @@ def pytest_collection_modifyitems(config, items):
         config.hook.pytest_deselected(items=slow)
         items[:] = [item for item in items if not item.get_closest_marker("slow")]
 
-# A small valid 2D case: a 10 x 10 block of fluid (dx = 0.02 m) resting in a 1 m box.
-GOOD_CASE = """
-[case]
-dim = 2
-
-[domain]
-min = [0.0, 0.0]
-max = [1.0, 1.0]
-
-[[blocks]]
-min = [0.2, 0.2]
-max = [0.4, 0.4]
-
-[particles]
-dx = 0.02
-
-[time]
-t_end = 0.002
-
-[plugins]
-use = []
-"""
+# The good case (core_cases.good) as case.toml text, for tests that malform the text (test_malformed_inputs).
+GOOD_CASE = case_toml(good())
 
 
 def make_sim(case_dir, overrides=()) -> Simulation:
@@ -110,8 +92,8 @@ def by_id(state) -> dict[str, np.ndarray]:
 
 @pytest.fixture
 def good_case(tmp_path) -> Path:
-    """A valid case directory (see GOOD_CASE)."""
-    return write_case(tmp_path / "good", GOOD_CASE)
+    """A valid case directory (core_cases.good)."""
+    return write_case(tmp_path / "good", good())
 
 
 def script(name: str):

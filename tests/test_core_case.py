@@ -12,70 +12,69 @@ import re
 from pathlib import Path
 
 import pytest
-from conftest import GOOD_CASE, make_sim, write_case
+from conftest import make_sim, write_case
+from core_cases import good
 
 from sphcore import cli
 from sphcore.errors import CaseError
 from sphcore.physics.kernels import CUBIC_SPLINE
 from sphcore.run import runner
-
-DOMAIN_BOX = "[domain]\nmin = [0.0, 0.0]\nmax = [1.0, 1.0]\n"
-
-
-def _edit(old: str, new: str) -> str:
-    assert GOOD_CASE.count(old) == 1, old
-    return GOOD_CASE.replace(old, new)
+from sphcore.testing import case_with
 
 
-# (id, case.toml text, --set overrides, the key the error must name)
+def _edit(changes: dict) -> dict:
+    """The good case (core_cases.good) with ``changes`` (see sphcore.testing.case_with)."""
+    return case_with(good(), changes)
+
+
+# (id, case, --set overrides, the key the error must name)
 MALFORMED = [
-    ("unknown-section", GOOD_CASE + "\n[bogus]\nx = 1\n", [], "bogus"),
-    ("unknown-key", _edit("t_end = 0.002", "t_end = 0.002\nt_ned = 1.0"), [], "time.t_ned"),
-    ("unknown-block-key", _edit("max = [0.4, 0.4]", "max = [0.4, 0.4]\nvelocty = [1.0, 0.0]"), [], "blocks[0].velocty"),
-    ("wrong-type-float", _edit("dx = 0.02", 'dx = "small"'), [], "particles.dx"),
-    ("wrong-type-bool", GOOD_CASE + "\n[physics]\nsph = 1\n", [], "physics.sph"),
-    ("wrong-type-section", "time = 0.002\n" + _edit("[time]\nt_end = 0.002", ""), [], "time"),
-    ("wrong-type-choice", GOOD_CASE + '\n[kernel]\nname = "gaussian"\n', [], "kernel.name"),
-    ("dx-zero", _edit("dx = 0.02", "dx = 0.0"), [], "particles.dx"),
-    ("dx-negative", _edit("dx = 0.02", "dx = -0.02"), [], "particles.dx"),
-    ("t_end-zero", _edit("t_end = 0.002", "t_end = 0.0"), [], "time.t_end"),
-    ("t_end-negative", _edit("t_end = 0.002", "t_end = -1.0"), [], "time.t_end"),
-    ("dim-4", _edit("dim = 2", "dim = 4"), [], "case.dim"),
-    ("rho-bounds-crossed", GOOD_CASE + "\n[checks]\nrho_min = 1.2\nrho_max = 1.1\n", [], "checks.rho_max"),
-    ("no-blocks", _edit("[[blocks]]\nmin = [0.2, 0.2]\nmax = [0.4, 0.4]\n", ""), [], "blocks"),
-    ("block-without-max", _edit("max = [0.4, 0.4]\n", ""), [], "blocks[0].max"),
-    ("block-count-wrong", _edit("max = [0.4, 0.4]", "count = [10, 0]"), [], "blocks[0].count"),
-    ("block-max-below-min", _edit("max = [0.4, 0.4]", "max = [0.4, 0.1]"), [], "blocks[0].max"),
-    ("domain-max-below-min", _edit("max = [1.0, 1.0]", "max = [1.0, -1.0]"), [], "domain.max"),
-    ("domain-min-alone", _edit("max = [1.0, 1.0]\n", ""), [], "domain.max"),
-    ("vector-wrong-length", _edit("min = [0.0, 0.0]", "min = [0.0, 0.0, 0.0]"), [], "domain.min"),
-    ("velocity-wrong-length", _edit("max = [0.4, 0.4]", "max = [0.4, 0.4]\nvelocity = [1.0]"), [],
-     "blocks[0].velocity"),
-    ("gravity-too-short", GOOD_CASE + "\n[physics]\ngravity = [0.0]\n", [], "physics.gravity"),
-    ("planes-bound-nothing", _edit(DOMAIN_BOX, "[[domain.planes]]\nnormal = [0.0, 1.0]\npoint = [0.0, 0.0]\n"), [],
+    ("unknown-section", _edit({"bogus.x": 1}), [], "bogus"),
+    ("unknown-key", _edit({"time.t_ned": 1.0}), [], "time.t_ned"),
+    ("unknown-block-key", _edit({"blocks[0].velocty": [1.0, 0.0]}), [], "blocks[0].velocty"),
+    ("wrong-type-float", _edit({"particles.dx": "small"}), [], "particles.dx"),
+    ("wrong-type-bool", _edit({"physics.sph": 1}), [], "physics.sph"),
+    ("wrong-type-section", _edit({"time": 0.002}), [], "time"),
+    ("wrong-type-choice", _edit({"kernel.name": "gaussian"}), [], "kernel.name"),
+    ("dx-zero", _edit({"particles.dx": 0.0}), [], "particles.dx"),
+    ("dx-negative", _edit({"particles.dx": -0.02}), [], "particles.dx"),
+    ("t_end-zero", _edit({"time.t_end": 0.0}), [], "time.t_end"),
+    ("t_end-negative", _edit({"time.t_end": -1.0}), [], "time.t_end"),
+    ("dim-4", _edit({"case.dim": 4}), [], "case.dim"),
+    ("rho-bounds-crossed", _edit({"checks": {"rho_min": 1.2, "rho_max": 1.1}}), [], "checks.rho_max"),
+    ("no-blocks", _edit({"blocks": None}), [], "blocks"),
+    ("block-without-max", _edit({"blocks[0].max": None}), [], "blocks[0].max"),
+    ("block-count-wrong", _edit({"blocks[0].max": None, "blocks[0].count": [10, 0]}), [], "blocks[0].count"),
+    ("block-max-below-min", _edit({"blocks[0].max": [0.4, 0.1]}), [], "blocks[0].max"),
+    ("domain-max-below-min", _edit({"domain.max": [1.0, -1.0]}), [], "domain.max"),
+    ("domain-min-alone", _edit({"domain.max": None}), [], "domain.max"),
+    ("vector-wrong-length", _edit({"domain.min": [0.0, 0.0, 0.0]}), [], "domain.min"),
+    ("velocity-wrong-length", _edit({"blocks[0].velocity": [1.0]}), [], "blocks[0].velocity"),
+    ("gravity-too-short", _edit({"physics.gravity": [0.0]}), [], "physics.gravity"),
+    ("planes-bound-nothing", _edit({"domain": {"planes": [{"normal": [0.0, 1.0], "point": [0.0, 0.0]}]}}), [],
      "domain.planes"),
-    ("planes-open-wedge", _edit(DOMAIN_BOX, "[[domain.planes]]\nnormal = [0.0, 1.0]\npoint = [0.0, 0.0]\n"
-                                            "[[domain.planes]]\nnormal = [1.0, 0.0]\npoint = [0.0, 0.0]\n"
-                                            "[[domain.planes]]\nnormal = [-1.0, 1.0]\npoint = [1.0, 0.0]\n"),
+    ("planes-open-wedge", _edit({"domain": {"planes": [{"normal": [0.0, 1.0], "point": [0.0, 0.0]},
+                                                       {"normal": [1.0, 0.0], "point": [0.0, 0.0]},
+                                                       {"normal": [-1.0, 1.0], "point": [1.0, 0.0]}]}}),
      [], "domain.planes"),
-    ("plane-zero-normal", _edit("[[blocks]]", "[[domain.planes]]\nnormal = [0.0, 0.0]\npoint = [0.0, 0.0]\n\n[[blocks]]"),
+    ("plane-zero-normal", _edit({"domain.planes": [{"normal": [0.0, 0.0], "point": [0.0, 0.0]}]}),
      [], "domain.planes[0].normal"),
-    ("no-walls", _edit(DOMAIN_BOX, ""), [], "domain"),
-    ("unknown-plugin", _edit("use = []", 'use = ["no_such_plugin"]'), [], "plugins.use"),
-    ("set-bad-value", GOOD_CASE, ["time.t_end=abc"], "time.t_end"),
-    ("set-negative-dx", GOOD_CASE, ["particles.dx=-1"], "particles.dx"),
-    ("set-unknown-key", GOOD_CASE, ["time.t_ned=1.0"], "time.t_ned"),
-    ("set-wrong-length", GOOD_CASE, ["case.dim=3"], "domain.min"),
+    ("no-walls", _edit({"domain": None}), [], "domain"),
+    ("unknown-plugin", _edit({"plugins.use": ["no_such_plugin"]}), [], "plugins.use"),
+    ("set-bad-value", good(), ["time.t_end=abc"], "time.t_end"),
+    ("set-negative-dx", good(), ["particles.dx=-1"], "particles.dx"),
+    ("set-unknown-key", good(), ["time.t_ned=1.0"], "time.t_ned"),
+    ("set-wrong-length", good(), ["case.dim=3"], "domain.min"),
 ]
 
 # Found when the particles are built (Simulation / sph check), not by the schema.
 MALFORMED_AT_BUILD = [
-    ("particles-outside-domain", _edit("max = [0.4, 0.4]", "max = [1.3, 0.4]"), [], "blocks[0]"),
+    ("particles-outside-domain", _edit({"blocks[0].max": [1.3, 0.4]}), [], "blocks[0]"),
     ("particles-outside-plane",  # the extra wall x + y <= 0.6 cuts through the block
-     _edit("[[blocks]]", "[[domain.planes]]\nnormal = [-1.0, -1.0]\npoint = [0.3, 0.3]\n\n[[blocks]]"),
+     _edit({"domain.planes": [{"normal": [-1.0, -1.0], "point": [0.3, 0.3]}]}),
      [], "blocks[0]"),
-    ("empty-block", _edit("dx = 0.02", "dx = 0.5"), [], "blocks[0]"),
-    ("no-sound-speed-without-gravity", GOOD_CASE + "\n[physics]\ngravity = [0.0, 0.0]\n", [], "eos.c0"),
+    ("empty-block", _edit({"particles.dx": 0.5}), [], "blocks[0]"),
+    ("no-sound-speed-without-gravity", _edit({"physics.gravity": [0.0, 0.0]}), [], "eos.c0"),
 ]
 
 ALL_MALFORMED = MALFORMED + MALFORMED_AT_BUILD
@@ -115,18 +114,18 @@ def _assert_one_line_error(err: str, *needles):
         assert str(needle) in lines[0]
 
 
-@pytest.mark.parametrize("text, overrides, key", _params(ALL_MALFORMED))
-def test_malformed_case_is_a_case_error(tmp_path, text, overrides, key):
-    case_dir = write_case(tmp_path / "case", text)
+@pytest.mark.parametrize("case, overrides, key", _params(ALL_MALFORMED))
+def test_malformed_case_is_a_case_error(tmp_path, case, overrides, key):
+    case_dir = write_case(tmp_path / "case", case)
     with pytest.raises(CaseError) as info:
         make_sim(case_dir, overrides)
     _assert_names_file_and_key(info.value, case_dir, key, overrides)
 
 
-@pytest.mark.parametrize("text, overrides, key",
+@pytest.mark.parametrize("case, overrides, key",
                          _params(ALL_MALFORMED))
-def test_cli_run_rejects_malformed_case(tmp_path, capsys, text, overrides, key):
-    case_dir = write_case(tmp_path / "case", text)
+def test_cli_run_rejects_malformed_case(tmp_path, capsys, case, overrides, key):
+    case_dir = write_case(tmp_path / "case", case)
     before = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*"))
     sets = [a for o in overrides for a in ("--set", o)]
     status, out, err = _cli(capsys, "run", case_dir, *sets)
@@ -136,10 +135,10 @@ def test_cli_run_rejects_malformed_case(tmp_path, capsys, text, overrides, key):
     assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before, "something was written"
 
 
-@pytest.mark.parametrize("text, overrides, key",
+@pytest.mark.parametrize("case, overrides, key",
                          _params(ALL_MALFORMED))
-def test_cli_check_rejects_malformed_case(tmp_path, capsys, text, overrides, key):
-    case_dir = write_case(tmp_path / "case", text)
+def test_cli_check_rejects_malformed_case(tmp_path, capsys, case, overrides, key):
+    case_dir = write_case(tmp_path / "case", case)
     sets = [a for o in overrides for a in ("--set", o)]
     status, out, err = _cli(capsys, "check", case_dir, *sets)
     assert status == 2
@@ -210,30 +209,18 @@ def test_check_good_case(good_case, capsys):
     assert not (good_case / "output").exists()
 
 
-GOOD_3D = """
-[case]
-dim = 3
-
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [1.0, 1.0, 1.0]
-
-[[blocks]]
-min = [0.2, 0.2, 0.2]
-count = [5, 4, 3]
-
-[particles]
-dx = 0.02
-"""
+GOOD_3D = {
+    "case": {"dim": 3},
+    "domain": {"min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]},
+    "blocks": [{"min": [0.2, 0.2, 0.2], "count": [5, 4, 3]}],
+    "particles": {"dx": 0.02},
+}
 
 # a box without its top (y = 1) face: open upwards
-OPEN_BOX_3D = GOOD_3D.replace("""[domain]
-min = [0.0, 0.0, 0.0]
-max = [1.0, 1.0, 1.0]
-""", "".join(f"[[domain.planes]]\nnormal = {n}\npoint = {p}\n" for n, p in [
+OPEN_BOX_3D = case_with(GOOD_3D, {"domain": {"planes": [{"normal": n, "point": p} for n, p in [
     ([1.0, 0.0, 0.0], [0.0, 0.0, 0.0]), ([-1.0, 0.0, 0.0], [1.0, 1.0, 1.0]),
     ([0.0, 1.0, 0.0], [0.0, 0.0, 0.0]),
-    ([0.0, 0.0, 1.0], [0.0, 0.0, 0.0]), ([0.0, 0.0, -1.0], [1.0, 1.0, 1.0])]))
+    ([0.0, 0.0, 1.0], [0.0, 0.0, 0.0]), ([0.0, 0.0, -1.0], [1.0, 1.0, 1.0])]]}})
 
 
 def test_check_good_3d_case(tmp_path, capsys):
@@ -242,8 +229,8 @@ def test_check_good_3d_case(tmp_path, capsys):
     assert status == 0, err
     assert ": ok: 3D, 60 particles, 6 wall planes" in out
     # the same planes given one by one, closed with a tilted lid, bound a region too
-    lid = '[[domain.planes]]\nnormal = [0.0, -1.0, -0.2]\npoint = [0.0, 1.0, 0.0]\n'
-    write_case(tmp_path / "lid", OPEN_BOX_3D.replace("[[blocks]]", lid + "\n[[blocks]]"))
+    lid = {"normal": [0.0, -1.0, -0.2], "point": [0.0, 1.0, 0.0]}
+    write_case(tmp_path / "lid", case_with(OPEN_BOX_3D, {"domain.planes": [*OPEN_BOX_3D["domain"]["planes"], lid]}))
     status, out, err = _cli(capsys, "check", tmp_path / "lid")
     assert status == 0, err
     assert ": ok: 3D, 60 particles, 6 wall planes" in out
@@ -324,8 +311,7 @@ def test_a_dx_that_rounds_a_block_into_a_wall_says_which_max_fits(tmp_path, caps
     """A block against the right wall, 0.6 m long: dx = 0.016 gives 37.5 rows, rounded up to
     38, the last past the wall. The one-line error names the block and the max that fits,
     and with that max the case loads."""
-    text = _edit("min = [0.2, 0.2]\nmax = [0.4, 0.4]", "min = [0.4, 0.0]\nmax = [1.0, 0.4]")
-    case_dir = write_case(tmp_path / "case", text)
+    case_dir = write_case(tmp_path / "case", _edit({"blocks[0].min": [0.4, 0.0], "blocks[0].max": [1.0, 0.4]}))
     status, _, err = _cli(capsys, "check", case_dir, "--set", "particles.dx=0.016")
     assert status == 2
     _assert_one_line_error(err, "blocks[0]", "37.5 dx", "give max[0] = 0.992", "--set 'blocks[0].max=[0.992, 0.4]'")

@@ -14,7 +14,7 @@ import numba
 import numpy as np
 import pytest
 from conftest import make_sim, write_case
-from core_cases import BLOB
+from core_cases import blob
 
 from sphcore.neighbours.cellgrid import CellGrid
 from sphcore.physics.corrections import neighbour_sums
@@ -26,7 +26,7 @@ from sphcore_plugins.wall_integral.completion import complete_at_wall
 
 
 def _setup(tmp_path, dim, seed, kernel_gradient, walls, side=None):
-    sim = make_sim(write_case(tmp_path / "blob", BLOB))
+    sim = make_sim(write_case(tmp_path / "blob", blob()))
     prm0 = sim.params
     rng = np.random.default_rng(seed)
     dx = 0.02

@@ -10,9 +10,10 @@ import math
 import numpy as np
 import pytest
 from conftest import by_id, make_sim, run_to_end, write_case
-from core_cases import BLOB, COLLIDING, SPH_KERNELS, spheres
+from core_cases import SPH_KERNELS, blob, colliding, spheres
 
 from sphcore.run import runner
+from sphcore.testing import case_with
 
 # ----------------------------------------------------------------------------------------
 # only what the scene requires
@@ -129,9 +130,9 @@ def test_spheres_in_an_sph_case_are_rejected(tmp_path):
     case is refused with the key named rather than silently treating spheres as fluid."""
     from sphcore.errors import CaseError
 
-    text = COLLIDING.replace('velocity = [0.5, 0.0]', 'velocity = [0.5, 0.0]\nkind = "sphere"')
+    case = case_with(colliding(), {"blocks[0].kind": "sphere"})
     with pytest.raises(CaseError, match=r"blocks\[\d\]\.kind"):
-        make_sim(write_case(tmp_path / "mixed", text))
+        make_sim(write_case(tmp_path / "mixed", case))
 
 
 # ----------------------------------------------------------------------------------------
@@ -139,9 +140,9 @@ def test_spheres_in_an_sph_case_are_rejected(tmp_path):
 # ----------------------------------------------------------------------------------------
 
 
-BLOB_3D = (BLOB.replace("dim = 2", "dim = 3").replace("[-5.0, -5.0]", "[-5.0, -5.0, -5.0]")
-           .replace("[5.0, 5.0]", "[5.0, 5.0, 5.0]").replace("[-0.1, -0.1]", "[-0.05, -0.05, -0.05]")
-           .replace("count = [10, 10]", "count = [5, 5, 5]").replace("[0.0, 0.0]", "[0.0, 0.0, 0.0]"))
+BLOB_3D = case_with(blob(), {"case.dim": 3, "domain.min": [-5.0, -5.0, -5.0], "domain.max": [5.0, 5.0, 5.0],
+                             "blocks[0].min": [-0.05, -0.05, -0.05], "blocks[0].count": [5, 5, 5],
+                             "physics.gravity": [0.0, 0.0, 0.0]})
 
 
 def _momentum(st):
@@ -158,7 +159,7 @@ def _angular_momentum(st):
 
 @pytest.mark.parametrize("dim, scheme", [(2, "leapfrog"), (2, "euler"), (3, "leapfrog")])
 def test_blob_conserves_momentum_angular_momentum_and_mass(tmp_path, dim, scheme):
-    case_dir = write_case(tmp_path / "blob", BLOB if dim == 2 else BLOB_3D)
+    case_dir = write_case(tmp_path / "blob", blob() if dim == 2 else BLOB_3D)
     sim = make_sim(case_dir, [f"integrator.scheme={scheme}"])
     assert sim.state.dim == dim and sim.state.n == (100 if dim == 2 else 125)
     rng = np.random.default_rng(7)
@@ -188,7 +189,7 @@ def test_blob_conserves_momentum_angular_momentum_and_mass(tmp_path, dim, scheme
 
 
 def test_mirror_symmetric_collision_stays_symmetric(tmp_path):
-    case_dir = write_case(tmp_path / "collide", COLLIDING)
+    case_dir = write_case(tmp_path / "collide", colliding())
     sim = make_sim(case_dir)
     st = sim.state
     # the mirror partner of each particle (exact at t = 0)

@@ -11,10 +11,12 @@ import re
 import numpy as np
 import pytest
 from conftest import by_id, make_sim, run_to_end, write_case
-from core_cases import BLOB, COLLIDING, SPHERES
+from core_cases import blob as blob_case  # a test below names its cell grid blob
+from core_cases import colliding, spheres_case
 
 from sphcore import cli
 from sphcore.run import runner
+from sphcore.testing import case_with
 
 # ----------------------------------------------------------------------------------------
 # instability
@@ -28,7 +30,7 @@ def _message_parts(message):
 
 
 def test_density_bound_stops_the_run(tmp_path, capsys):
-    case_dir = write_case(tmp_path / "collide", COLLIDING + "\n[checks]\nrho_max = 1.0001\n")
+    case_dir = write_case(tmp_path / "collide", case_with(colliding(), {"checks.rho_max": 1.0001}))
     summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert summary["status"] == "unstable"
     sim = summary.simulation
@@ -52,11 +54,9 @@ def test_density_bound_stops_the_run(tmp_path, capsys):
 
 
 def test_particle_leaving_the_domain_is_caught(tmp_path):
-    text = SPHERES.format(velocity=[0.0, 0.0], gravity=[0.0, 0.0], t_end=1.0, dt="dt = 0.01",
-                          scheme="leapfrog").replace("min = [-10.0, -10.0]", "min = [0.0, 0.0]")
-    text = text.replace("count = [4, 3]", "count = [1, 1]") + (
-        "\n[[blocks]]\nmin = [0.02, 0.5]\ncount = [1, 1]\nkind = \"sphere\"\nvelocity = [-1.0, 0.0]\n")
-    case_dir = write_case(tmp_path / "leak", text)
+    case = case_with(spheres_case(t_end=1.0, dt=0.01), {"domain.min": [0.0, 0.0], "blocks[0].count": [1, 1]})
+    case["blocks"].append({"min": [0.02, 0.5], "count": [1, 1], "kind": "sphere", "velocity": [-1.0, 0.0]})
+    case_dir = write_case(tmp_path / "leak", case)
     summary = runner.run(case_dir, output=tmp_path / "out", quiet=True)
     assert summary["status"] == "unstable"
     step, t, reason, pid = _message_parts(summary["message"])
@@ -71,7 +71,7 @@ def test_a_particle_far_from_the_rest_is_no_instability(tmp_path):
     the box would hold ~9000 cells) costs one cell of the sorted-key grid, and the run goes on."""
     from sphcore.neighbours.cellgrid import CellGrid
 
-    sim = make_sim(write_case(tmp_path / "blob", BLOB))
+    sim = make_sim(write_case(tmp_path / "blob", blob_case()))
     sim.state.pos[0] = [4.9, 4.9]
     assert sim.step % sim.case.config["neighbours"]["sort_every"] == 0  # the next step reorders
     sim.advance()
@@ -86,7 +86,7 @@ def test_a_particle_far_from_the_rest_is_no_instability(tmp_path):
 def test_non_finite_positions_are_an_instability(tmp_path):
     from sphcore.errors import Instability
 
-    sim = make_sim(write_case(tmp_path / "blob", BLOB))
+    sim = make_sim(write_case(tmp_path / "blob", blob_case()))
     sim.state.pos[0] = [np.nan, 4.9]
     with pytest.raises(Instability, match="non-finite"):
         sim.advance()
@@ -147,8 +147,8 @@ def test_fixed_dt_is_honoured_and_ends_on_t_end(good_case, t_end, n_steps, last)
 def test_restart_is_bit_for_bit(tmp_path):
     dt = 2.0**-13  # t = k dt is exact: the interrupted run lands on t1 with full steps
     t_end, t1 = 40 * dt, 15 * dt
-    text = COLLIDING.replace("t_end = 0.01", f"t_end = {t_end!r}\ndt = {dt!r}") + "\n[fluid]\nnu = 1e-6\n"
-    case_dir = write_case(tmp_path / "case", text)
+    case = case_with(colliding(), {"time.t_end": t_end, "time.dt": dt, "fluid.nu": 1e-6})
+    case_dir = write_case(tmp_path / "case", case)
     full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
     part = runner.run(case_dir, output=tmp_path / "part", t_end=t1, quiet=True)
     assert part["status"] == "completed" and part.simulation.step == 15 and part.simulation.t == t1
@@ -185,9 +185,9 @@ def test_a_time_step_allocates_no_array_per_particle(tmp_path, plugins, override
     include a reorder; the measured peak is ~80 kB, mostly tracemalloc's own records."""
     import tracemalloc
 
-    text = BLOB.replace("count = [10, 10]", "count = [224, 224]").replace('use = []', f"use = {plugins!r}".replace("'", '"'))
-    text = text.replace("min = [-5.0, -5.0]", "min = [-0.2, -0.2]").replace("max = [5.0, 5.0]", "max = [4.6, 4.6]")
-    sim = make_sim(write_case(tmp_path / "big", text), overrides)
+    case = case_with(blob_case(), {"blocks[0].count": [224, 224], "plugins.use": plugins,
+                              "domain.min": [-0.2, -0.2], "domain.max": [4.6, 4.6]})
+    sim = make_sim(write_case(tmp_path / "big", case), overrides)
     assert sim.state.n == 224 * 224
     for _ in range(3):
         sim.advance()  # first-use buffers

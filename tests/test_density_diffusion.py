@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 from conftest import make_sim, write_case
-from core_cases import BLOB
+from core_cases import blob
 
 from sphcore.neighbours.cellgrid import CellGrid
 from sphcore.physics.equations import WallTerms, sph_rates
@@ -28,7 +28,7 @@ def _column_rates(tmp_path, dim, k_of_rho=None):
     """drho/dt of the interior particles of a column of water at rest, exactly hydrostatic;
     only density diffusion is on. ``k_of_rho``: replaces the pair loop's k by a reference
     gather with that k (to show what the test detects)."""
-    prm0 = make_sim(write_case(tmp_path / "blob", BLOB)).params
+    prm0 = make_sim(write_case(tmp_path / "blob", blob())).params
     dx, H = 0.02, 1.0
     h = 2.0 * dx
     c0 = 10.0 * np.sqrt(2.0 * 9.81 * H)  # the cases' rule: 44 m/s, rho 0.5% above rho0 at the floor

@@ -10,7 +10,7 @@ import numba
 import numpy as np
 import pytest
 from conftest import by_id, make_sim, write_case
-from core_cases import COLLIDING
+from core_cases import colliding
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -21,6 +21,7 @@ from sphcore_plugins.wall_integral.completion import complete_at_wall
 from sphcore.physics.pairterms import WORK_COLUMNS
 from sphcore.physics.particles import Fields
 from sphcore.run import runner
+from sphcore.testing import case_with
 
 
 def _cloud(dim, side, seed, dx=0.02):
@@ -35,9 +36,9 @@ def _cloud(dim, side, seed, dx=0.02):
 
 
 def _params(tmp_path, dim, dx=0.02):
-    from core_cases import BLOB
+    from core_cases import blob
 
-    prm = make_sim(write_case(tmp_path / "blob", BLOB)).params
+    prm = make_sim(write_case(tmp_path / "blob", blob())).params
     h = 1.3 * dx
     gravity = np.zeros(3)
     gravity[dim - 1] = -9.81
@@ -160,9 +161,8 @@ def test_restart_with_a_kept_list_is_bit_for_bit(tmp_path, skin, at):
     (at = 14, sort_every = 7); skin 0.004 rebuilds every few steps."""
     dt = 2.0**-13
     t_end, t1 = 40 * dt, at * dt
-    text = (COLLIDING.replace("t_end = 0.01", f"t_end = {t_end!r}\ndt = {dt!r}")
-            + f"\n[neighbours]\nskin = {skin}\nsort_every = 7\n")
-    case_dir = write_case(tmp_path / "case", text)
+    case = case_with(colliding(), {"time.t_end": t_end, "time.dt": dt, "neighbours": {"skin": skin, "sort_every": 7}})
+    case_dir = write_case(tmp_path / "case", case)
     full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
     part = runner.run(case_dir, output=tmp_path / "part", t_end=t1, quiet=True)
     sim = part.simulation
@@ -189,8 +189,8 @@ def test_a_restart_that_takes_no_step_keeps_the_lists_anchor(tmp_path):
     extension continues as an extension of the run without that restart, bit for bit."""
     dt = 2.0**-13
     t1, t2 = 15 * dt, 40 * dt
-    text = COLLIDING.replace("t_end = 0.01", f"t_end = {t2!r}\ndt = {dt!r}") + "\n[neighbours]\nskin = 0.3\n"
-    case_dir = write_case(tmp_path / "case", text)
+    case = case_with(colliding(), {"time.t_end": t2, "time.dt": dt, "neighbours.skin": 0.3})
+    case_dir = write_case(tmp_path / "case", case)
     for name in ("plain", "noop"):
         runner.run(case_dir, output=tmp_path / name, t_end=t1, quiet=True)
     noop = runner.run(case_dir, output=tmp_path / "noop", t_end=t1, restart=True, quiet=True)

@@ -4,14 +4,16 @@ and a checkpoint's payload read back is the same state."""
 from __future__ import annotations
 
 import numpy as np
-from conftest import GOOD_CASE, by_id, make_sim, write_case
+from conftest import by_id, make_sim, write_case
+from core_cases import good
 
 from sphcore.run.state import RunState
+from sphcore.testing import case_with
 
 # a dam-break column with walls, kept pair lists, density diffusion and a plugin that
 # keeps figures: every part of the state changes from step to step
-CASE = GOOD_CASE.replace("use = []", 'use = ["reflective", "wall_integral", "front_gauge"]').replace(
-    "t_end = 0.002", "t_end = 0.05") + "\n[density_diffusion]\ndelta = 0.1\n[neighbours]\nskin = 0.3\nsort_every = 5\n"
+CASE = case_with(good(), {"plugins.use": ["reflective", "wall_integral", "front_gauge"], "time.t_end": 0.05,
+                          "density_diffusion.delta": 0.1, "neighbours": {"skin": 0.3, "sort_every": 5}})
 
 
 def _steps(sim, n):
