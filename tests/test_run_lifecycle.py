@@ -29,6 +29,7 @@ import xarray as xr
 from conftest import write_case
 
 from sphcore import cli
+from sphcore.testing import case_toml
 from sphcore_plugins.vtu import read_pvd
 
 T_END = 0.3  # s simulated: ~2700 steps, ~2 s of stepping on a 2-core machine after ~2 s of start-up
@@ -37,37 +38,18 @@ FRAME_DT = 0.01  # s between frames, both writers
 
 # A small dam break (the Cruchaga tank of cases/dam_break at dx = 1 cm): 288 particles,
 # reflective walls, VTU and netCDF frames every 0.01 s.
-CASE = f"""
-[case]
-name = "mini_dam"
-dim = 2
-
-[domain]
-min = [0.0, 0.0]
-max = [0.42, 0.44]
-
-[[blocks]]
-min = [0.0, 0.0]
-count = [12, 24]
-
-[particles]
-dx = 0.01
-
-[viscosity]
-alpha = 0.2
-
-[time]
-t_end = {T_END}
-
-[plugins]
-use = ["reflective", "vtu", "netcdf"]
-
-[vtu]
-every_dt = {FRAME_DT}
-
-[netcdf]
-every_dt = {FRAME_DT}
-"""
+MINI_DAM = {
+    "case": {"name": "mini_dam", "dim": 2},
+    "domain": {"min": [0.0, 0.0], "max": [0.42, 0.44]},
+    "blocks": [{"min": [0.0, 0.0], "count": [12, 24]}],
+    "particles": {"dx": 0.01},
+    "viscosity": {"alpha": 0.2},
+    "time": {"t_end": T_END},
+    "plugins": {"use": ["reflective", "vtu", "netcdf"]},
+    "vtu": {"every_dt": FRAME_DT},
+    "netcdf": {"every_dt": FRAME_DT},
+}
+CASE = case_toml(MINI_DAM)  # the same case as case.toml text (benchmarks/faults edit the text)
 
 STATE = ("pos", "vel", "rho")
 FRAME_FIELDS = ("time", "step", "position", "velocity", "density", "pressure")
@@ -165,7 +147,7 @@ def snapshot(root: Path) -> dict[str, tuple]:
 
 @pytest.fixture(scope="module")
 def case_dir(tmp_path_factory) -> Path:
-    return write_case(tmp_path_factory.mktemp("lifecycle") / "mini_dam", CASE)
+    return write_case(tmp_path_factory.mktemp("lifecycle") / "mini_dam", MINI_DAM)
 
 
 @pytest.fixture(scope="module")

@@ -21,12 +21,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import GOOD_CASE, write_case
-from test_run_lifecycle import CASE, FRAME_FIELDS, checkpoint_by_id, netcdf_frames, snapshot, sph_command, stray_files
+from conftest import write_case
+from core_cases import good
+from test_run_lifecycle import (
+    FRAME_FIELDS,
+    MINI_DAM,
+    checkpoint_by_id,
+    netcdf_frames,
+    snapshot,
+    sph_command,
+    stray_files,
+)
 
 import sphcore
 from sphcore import cli
 from sphcore.io import outdir
+from sphcore.testing import case_with
 
 
 def cli_main(capsys, *argv) -> tuple[int, str, str]:
@@ -46,7 +56,7 @@ CKPT = ["--set", "output.checkpoint_every_dt=0.02"]
 def dam(tmp_path_factory):
     """The mini dam break of test_run_lifecycle and its uninterrupted run (in this process)."""
     root = tmp_path_factory.mktemp("survival")
-    case_dir = write_case(root / "mini_dam", CASE)
+    case_dir = write_case(root / "mini_dam", MINI_DAM)
     ref = root / "ref"
     assert cli.main(["run", str(case_dir), "--output", str(ref), "--progress", "off", *CKPT]) == 0
     return case_dir, ref
@@ -166,7 +176,7 @@ def test_restart_of_another_run_is_refused_and_appends_nothing(stopped_run, tmp_
         argv += ["--set", "particles.dx=0.005"]
         needle = "particles.dx = 0.01 in the checkpoint, 0.005 now"
     elif change == "other_case":
-        other = write_case(tmp_path / "other", CASE.replace("alpha = 0.2", "alpha = 0.3"))
+        other = write_case(tmp_path / "other", case_with(MINI_DAM, {"viscosity.alpha": 0.3}))
         argv[1] = other
         needle = "case file"
     elif change == "version":
@@ -231,7 +241,7 @@ def test_overwrite_keeps_user_files_and_never_follows_links(stopped_run, tmp_pat
 
 def test_overwrite_refuses_the_output_of_another_case(stopped_run, tmp_path, capsys):
     _, out = stopped_run
-    other = write_case(tmp_path / "other", CASE)
+    other = write_case(tmp_path / "other", MINI_DAM)
     before = snapshot(out)
     status, _, err = cli_main(capsys, "run", other, "--output", out, "--overwrite", "--progress", "off")
     assert status == 2 and "holds the output of another case" in err
@@ -265,7 +275,7 @@ def test_symlinked_output_directory_is_refused(stopped_run, tmp_path, capsys):
 
 
 def test_output_dir_outside_the_case_needs_the_option(tmp_path, capsys):
-    case_dir = write_case(tmp_path / "case", GOOD_CASE + '\n[output]\ndir = "../elsewhere"\n')
+    case_dir = write_case(tmp_path / "case", case_with(good(), {"output.dir": "../elsewhere"}))
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "off")
     assert status == 2 and "output.dir" in err and "--output" in err
     assert not (tmp_path / "elsewhere").exists()
@@ -339,7 +349,8 @@ def test_full_disk_at_every_write_point(dam, tmp_path, capsys, monkeypatch, poin
     out = tmp_path / "out"
     argv = ["run", case_dir, "--output", out, "--progress", "off", *CKPT]
     if point == "gauge":  # the front gauge writes front.csv with the summary
-        case_dir = write_case(tmp_path / "gauged", CASE.replace('"netcdf"]', '"netcdf", "front_gauge"]'))
+        case_dir = write_case(tmp_path / "gauged", case_with(MINI_DAM, {"plugins.use": ["reflective", "vtu", "netcdf",
+                                                                                        "front_gauge"]}))
         argv[1] = case_dir
     with monkeypatch.context() as m:
         calls = inject_full_disk(m, point, after)
