@@ -23,13 +23,16 @@ Each gauge at a distance x from the piston's face at rest is measured in the win
 
 (cg the linear group velocity, t1 also no later than the last sample). The wave height is
 the mean over the whole waves in the window (zero up-crossing to zero up-crossing of the
-elevation less its mean over the window) of crest minus trough. The script prints the
-window, the number of waves, H, H/S measured and Biesel's and the relative error per gauge,
-the decay of H along the flume (an exponential fitted over the gauges, with its value
-extrapolated back to the piston: a diagnostic of the damping on the way, not theory), and,
-with wall_loads.csv, the mean and the first-harmonic amplitude (a least-squares fit at
-omega) of the horizontal force on the piston after the ramp (N/m in 2D). A path that is
-not a run of a piston flume: one line on stderr, exit status 2.
+elevation less its mean over the window) of crest minus trough (a ripple on the surface
+adds to it); H1 (columns H1/S) is twice the amplitude of a sine at omega fitted to the
+whole window by least squares, a check that uses every sample (it reads low where the
+amplitude varies across the window). The script prints the window, the number of waves,
+H, H/S measured and Biesel's and the relative error per gauge, the decay of H along the
+flume (an exponential fitted over the gauges, with its value extrapolated back to the
+piston: a diagnostic of the damping on the way, not theory), and, with wall_loads.csv, the
+mean and the first-harmonic amplitude (a least-squares fit at omega) of the horizontal
+force on the piston after the ramp (N/m in 2D). A path that is not a run of a piston
+flume: one line on stderr, exit status 2.
 
     python postprocessing/wave_flume.py cases/wave_flume/output
     python postprocessing/wave_flume.py cases/wave_flume/output cases/wave_flume_kh18/output
@@ -38,6 +41,7 @@ not a run of a piston flume: one line on stderr, exit status 2.
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import sys
 from pathlib import Path
@@ -116,7 +120,7 @@ def flume(run) -> dict:
     block = run.first_block()
     if not block:
         raise RunError(f"{run.dir}: no fluid block in the case")
-    lo, hi = run.block_extent(block)
+    _, hi = run.block_extent(block)
     floor = float(cfg["domain"]["min"][1])
     gauges = [(d["name"], float(d["point"][0])) for d in (cfg.get("probes") or {}).get("depth") or []]
     if not gauges:
@@ -133,7 +137,14 @@ def wave_heights(t, eta):
     up-crossing of eta less its mean); [] if fewer than two up-crossings."""
     e = eta - eta.mean()
     up = np.flatnonzero((e[:-1] < 0.0) & (e[1:] >= 0.0)) + 1
-    return [float(e[a:b].max() - e[a:b].min()) for a, b in zip(up[:-1], up[1:])]
+    return [float(e[a:b].max() - e[a:b].min()) for a, b in itertools.pairwise(up)]
+
+
+def first_harmonic(t, y, omega):
+    """(mean, amplitude) of the least-squares fit y ~ mean + a cos(omega t) + b sin(omega t)."""
+    basis = np.column_stack([np.ones_like(t), np.cos(omega * t), np.sin(omega * t)])
+    coef = np.linalg.lstsq(basis, y, rcond=None)[0]
+    return float(coef[0]), float(math.hypot(coef[1], coef[2]))
 
 
 def measure(run, margin=0.0) -> dict:
@@ -158,8 +169,9 @@ def measure(run, margin=0.0) -> dict:
         sel = (t >= t0) & (t <= t1)
         heights = wave_heights(t[sel], eta[sel]) if sel.sum() > 2 else []
         H = float(np.mean(heights)) if heights else math.nan
+        H1 = first_harmonic(t[sel], eta[sel], omega)[1] * 2.0 if sel.sum() > 3 else math.nan
         rows.append({"name": name, "x": x, "t0": t0, "t1": t1, "waves": len(heights), "H": H,
-                     "HS": H / f["S"], "eta": eta})
+                     "HS": H / f["S"], "HS1": H1 / f["S"], "eta": eta})
     return {**f, "rho0": data["rho0"], "k": k, "kh": kh, "cg": cg, "L": 2.0 * math.pi / k, "biesel": float(biesel(kh)),
             "t": t, "rows": rows, "dir": run.dir}
 
@@ -184,11 +196,9 @@ def paddle_force(run, m) -> dict | None:
         return None
     # least squares fit of mean + a cos(omega t) + b sin(omega t): the first harmonic's amplitude
     # (the reflective impulses make the raw series spiky; half its range overstates the swing)
-    omega = 2.0 * math.pi / m["T"]
     ts, fs = t[sel], fx[sel]
-    basis = np.column_stack([np.ones_like(ts), np.cos(omega * ts), np.sin(omega * ts)])
-    coef = np.linalg.lstsq(basis, fs, rcond=None)[0]
-    return {"mean": float(coef[0]), "amplitude": float(math.hypot(coef[1], coef[2])),
+    mean, amplitude = first_harmonic(ts, fs, 2.0 * math.pi / m["T"])
+    return {"mean": mean, "amplitude": amplitude,
             "half_range": float(0.5 * (fs.max() - fs.min())), "from": m["ramp_end"], "to": float(ts[-1]),
             "hydrostatic": 0.5 * m["rho0"] * m["g"] * m["h"] ** 2}
 
@@ -211,12 +221,13 @@ def report(m, force):
           f"piston face to far wall {m['far'] - m['face']:.4g} m")
     print(f"  Biesel H/S = {m['biesel']:.4f}")
     print(f"  {'gauge':<8}{'x [m]':>8}{'x/h':>6}{'window [s]':>18}{'waves':>7}{'H [m]':>10}{'H/S':>8}"
-          f"{'Biesel':>8}{'error':>9}")
+          f"{'Biesel':>8}{'error':>9}   {'H1/S':>7}{'error':>9}")
     for r in m["rows"]:
         err = (r["HS"] / m["biesel"] - 1.0) * 100.0
         window = f"{r['t0']:.2f} - {r['t1']:.2f}"
         print(f"  {r['name']:<8}{r['x']:>8.3f}{r['x'] / m['h']:>6.1f}{window:>18}{r['waves']:>7}"
-              f"{r['H']:>10.5f}{r['HS']:>8.4f}{m['biesel']:>8.4f}{err:>8.1f}%")
+              f"{r['H']:>10.5f}{r['HS']:>8.4f}{m['biesel']:>8.4f}{err:>8.1f}%   {r['HS1']:>7.4f}"
+              f"{(r['HS1'] / m['biesel'] - 1.0) * 100.0:>8.1f}%")
     good = [r["HS"] for r in m["rows"] if r["waves"]]
     if good:
         mean = float(np.mean(good))
