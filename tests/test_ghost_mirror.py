@@ -289,7 +289,7 @@ def test_serial_and_parallel_kernels_agree():
     kind = np.zeros(n, np.int8)
     walls = PlaneGroup(box.normals, box.offsets)
     rule = MirrorRule(0.1, 1e-10, 3, True)
-    ghost = GhostPressure(True, G, 0.0, RHO0, tait_b(C0, RHO0, GAMMA), 1.0 / GAMMA, 0.0)
+    ghost = GhostPressure(True, G, 0.0, RHO0, tait_b(C0, RHO0, GAMMA), 1.0 / GAMMA, 0.0, C0, GAMMA)
     outs = []
     for count, fill in ((count_images, fill_images), (count_images_serial, fill_images_serial)):
         passes = Passes(np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n + 1, np.int64))
