@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from sphcore.geometry.planes import Planes
-from sphcore_plugins.reflective.collision import reflect_particles
+from sphcore_plugins.reflective.entry import reflect_particles
 
 G = 9.81
 

@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 from sphcore.geometry.facegeom import face_distance
 from sphcore.geometry.faces import Faces, box, closed_wall, polygon, polyline
 from sphcore.geometry.planes import Planes
-from sphcore_plugins.reflective.collision import reflect_particles
+from sphcore_plugins.reflective.entry import reflect_particles
 
 
 def _load_benchmark(name):

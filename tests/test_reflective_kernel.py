@@ -6,7 +6,8 @@ from domains import box, random_directions, random_rotation, sample_inside, wedg
 
 from sphcore.geometry.planes import Planes
 from sphcore.physics.particles import lattice
-from sphcore_plugins.reflective.collision import TOL_REL, clearance, outside, reflect_particles
+from sphcore_plugins.reflective.collision import TOL_REL
+from sphcore_plugins.reflective.entry import clearance, outside, reflect_particles
 
 
 def run(pos0, pos, vel, planes, r, cr, acc=None, **kw):

@@ -15,7 +15,7 @@ from sphcore.plugin import hookspecs
 from sphcore.plugin.context import RunContext
 from sphcore.run.state import RunState
 from sphcore_plugins.reflective import ReflectivePlugin
-from sphcore_plugins.reflective.collision import outside
+from sphcore_plugins.reflective.entry import outside
 
 
 def manager():

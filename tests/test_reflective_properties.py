@@ -10,7 +10,7 @@ from domains import box, random_directions, random_polytope, random_rotation, sa
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sphcore_plugins.reflective.collision import outside, reflect_particles
+from sphcore_plugins.reflective.entry import outside, reflect_particles
 
 SETTINGS = settings(max_examples=150, deadline=None)
 M = 300  # particles per example

@@ -54,7 +54,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from fuzz_domains import KINDS, admissible, make_scene  # noqa: E402  (the random domains)
 
 from sphcore.jit import parallel  # noqa: E402
-from sphcore_plugins.reflective import collision  # noqa: E402
+from sphcore_plugins.reflective import entry  # noqa: E402
 
 
 def side(dom, pos):
@@ -79,19 +79,19 @@ def run_scene(scene, max_reflections=1000):
     flags, reflection counts and the seconds of that call. The face grid is built before
     the clock starts and handed in, so the time is the kernel's (and the argument checks')."""
     dom, n = scene.dom, scene.radius.size
-    fa = collision.face_arrays(dom.faces, dom.dim, float(scene.radius.max()))
+    fa = entry.face_arrays(dom.faces, dom.dim, float(scene.radius.max()))
     pos, vel = scene.pos1.copy(), scene.vel.copy()
     flags, counts = np.empty(n, np.int8), np.empty(n, np.int32)
-    build = collision.face_arrays
-    collision.face_arrays = lambda faces, dim, radius: fa
+    build = entry.face_arrays
+    entry.face_arrays = lambda faces, dim, radius: fa
     try:
         t0 = time.perf_counter()
-        collision.reflect_particles(scene.pos0, pos, vel, scene.acc, scene.radius, dom.planes,
+        entry.reflect_particles(scene.pos0, pos, vel, scene.acc, scene.radius, dom.planes,
                                     float(scene.cr), int(max_reflections), bool(scene.contact),
                                     flags, counts, faces=dom.faces)
         seconds = time.perf_counter() - t0
     finally:
-        collision.face_arrays = build
+        entry.face_arrays = build
     return pos, vel, flags, counts, seconds
 
 

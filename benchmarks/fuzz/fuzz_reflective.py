@@ -19,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore_plugins.reflective.collision import face_arrays, outside_mask, reflect
+from sphcore_plugins.reflective.collision import reflect
 from sphcore_plugins.reflective.corner import scratch
+from sphcore_plugins.reflective.entry import face_arrays, outside_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))  # the test domains
 from domains import box, random_directions, random_polytope, random_rotation, sample_inside, wedge  # noqa: E402

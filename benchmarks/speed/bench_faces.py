@@ -33,8 +33,9 @@ import numpy as np
 
 from sphcore.run import runner
 from sphcore.run.build import build
-from sphcore_plugins.reflective.collision import face_arrays, reflect
+from sphcore_plugins.reflective.collision import reflect
 from sphcore_plugins.reflective.corner import scratch
+from sphcore_plugins.reflective.entry import face_arrays
 
 CASE = """
 [case]

@@ -21,26 +21,26 @@ import numpy as np
 
 from sphcore.api import CaseError, Option, hookimpl
 
-from .collision import (
-    TOL_REL,
-    Paths,
-    Response,
-    Tally,
-    WallGroup,
-    clearance,
-    face_arrays,
-    min_clearance,
-    outside,
-    outside_mask,
-    reflect,
-    reflect_particles,
-    reflect_step,
-)
+from .collision import TOL_REL, Paths, Response, Tally, WallGroup, reflect, reflect_step
 from .corner import scratch
+from .entry import clearance, face_arrays, min_clearance, outside, outside_mask, reflect_particles
 from .moving import groups_of, reflect_moving
 
-__all__ = ["ReflectivePlugin", "reflect_step", "reflect", "reflect_particles", "clearance", "min_clearance",
-           "outside", "outside_mask", "TOL_REL", "Paths", "WallGroup", "Response", "Tally"]
+__all__ = [
+    "TOL_REL",
+    "Paths",
+    "ReflectivePlugin",
+    "Response",
+    "Tally",
+    "WallGroup",
+    "clearance",
+    "min_clearance",
+    "outside",
+    "outside_mask",
+    "reflect",
+    "reflect_particles",
+    "reflect_step",
+]
 
 TABLE = "reflective"
 

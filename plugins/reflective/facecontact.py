@@ -11,7 +11,7 @@ normal n = (C - q) / |C - q|, q the face's point nearest to the contact C. That 
 convex, so the tangent plane separates it from everything on its fluid side: a centre
 mirrored to at least r from the plane (Eq. 1) is clear of the face.
 
-The faces and their grid travel as one :class:`FaceSet` (:func:`.collision.face_arrays`);
+The faces and their grid travel as one :class:`FaceSet` (:func:`.entry.face_arrays`);
 the functions here, called per particle, take its arrays one by one (see
 :func:`.collision.reflect_step`).
 """

@@ -39,12 +39,12 @@ particle-steps.
 from __future__ import annotations
 
 import numpy as np
-
 from numba import prange
 
 from sphcore.api import Faces, by_size
 
-from .collision import Paths, Tally, WallGroup, face_arrays, reflect_step
+from .collision import Paths, WallGroup, reflect_step
+from .entry import face_arrays
 
 #: sweeps over the groups per step (a contact with a second group makes one more)
 MAX_SWEEPS = 8

@@ -35,6 +35,11 @@ Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
                       the plugin's name and kept across restarts (JSON numbers/strings).
 ``ctx.kept(plugin)``  the plugin's own dict of state to keep across a restart (numbers,
                       strings, lists or numpy arrays); restored before ``sph_setup``.
+``ctx.host()``        the particles as host numpy arrays, read-only: what a writer puts in
+                      its files (today the particles themselves).
+``ctx.planes_at(t)``  the case's wall planes at time t (s): a moving tank's where it is then.
+``ctx.add_wall_load`` (group, impulse, angular_impulse): what the fluid gave the walls
+                      of a moving group this step (N s, N m s), for ``wall_loads``.
 ====================  ===================================================================
 
 The context is a view of the run state (:class:`sphcore.run.state.RunState`, ``ctx.run``),

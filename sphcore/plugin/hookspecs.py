@@ -115,7 +115,8 @@ def sph_wall_terms(ctx, terms):
 def sph_wall_completion(dim):
     """Return the compiled function that adds the wall terms to a particle's rates, or None.
 
-    A plugin that implements ``sph_wall_terms`` says here how its terms enter the SPH
+    Fires once per run, when the core sets up its force evaluation (only if some plugin
+    implements ``sph_wall_terms``). A plugin that implements ``sph_wall_terms`` says here how its terms enter the SPH
     equations. The core compiles the function into its pair loop (inlined: it runs once
     per particle near a wall, after the particle's pairs) for a ``dim``-dimensional run;
     every plugin that returns one must return the same function. The function is a numba
@@ -142,7 +143,8 @@ def sph_wall_completion(dim):
 def sph_moving_walls():
     """Return True when this plugin honours walls that move (``case.moving``).
 
-    A case whose walls move (``[[domain.motion]]``, ``[[domain.walls.motion]]``) runs only
+    Fires once per run, after ``sph_configure``, and only for a case whose walls move. A
+    case whose walls move (``[[domain.motion]]``, ``[[domain.walls.motion]]``) runs only
     with plugins that say so, unless a plugin acts on the output alone (it implements no
     hook but sph_options, sph_configure, sph_output, sph_summary and sph_finish): a plugin
     written for fixed walls would otherwise act on walls that are no longer where it thinks.
