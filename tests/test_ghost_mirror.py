@@ -15,22 +15,16 @@ from sphcore.geometry.planes import Planes
 from sphcore.physics.eos import fill_pressure as tait_pressure
 from sphcore.physics.eos import tait_b
 from sphcore.physics.particles import FLUID, SPHERE, Fields
+from sphcore_plugins.ghost.images import MirrorImages, inverse_tait
 from sphcore_plugins.ghost.mirror import (
     TAIT_BASE_MIN,
-    FluidConstants,
-    GhostPressure,
-    Images,
-    MirrorImages,
-    MirrorRule,
-    Passes,
-    PlaneGroup,
     count_images,
     count_images_serial,
     exclusive_scan,
     fill_images,
     fill_images_serial,
-    inverse_tait,
 )
+from sphcore_plugins.ghost.records import FluidConstants, GhostPressure, Images, MirrorRule, Passes, PlaneGroup
 
 H = 0.013  # smoothing length (m); support 2h
 SUPPORT = 2 * H

@@ -25,7 +25,7 @@ motion) and need no coordination.
 
 Walls that move (``[[domain.motion]]``, :mod:`sphcore.case.motion`): the planes of a moving
 tank mirror the fluid where they are when the forces are evaluated, and the images take
-the wall's velocity and acceleration (:mod:`.mirror`: free slip and no slip relative to
+the wall's velocity and acceleration (:mod:`.moving`: free slip and no slip relative to
 the wall, the hydrostatic correction with g - a_w after Adami, Hu & Adams 2012, Eq. 27).
 A case with finite wall faces is refused, moving or not (the plugin mirrors across planes
 only). A force evaluation sees the planes at ``ctx.t``, the time the particles are at
@@ -40,7 +40,9 @@ from __future__ import annotations
 
 from sphcore.api import CaseError, Fields, Option, hookimpl
 
-from .mirror import MAX_PLANES, TAIT_BASE_MIN, FluidConstants, MirrorImages, PlaneGroup, WallMotion, inverse_tait
+from .images import MirrorImages, inverse_tait
+from .mirror import MAX_PLANES, TAIT_BASE_MIN
+from .records import FluidConstants, PlaneGroup, WallMotion
 
 __all__ = ["GhostPlugin", "MirrorImages", "FluidConstants", "PlaneGroup", "WallMotion", "inverse_tait",
            "TAIT_BASE_MIN"]

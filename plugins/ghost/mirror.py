@@ -59,10 +59,10 @@ A case whose walls do not move takes the fixed-wall kernels (the same bits as ev
 
 Generation is two numba passes over the particles (count, then fill at exclusive
 prefix-sum offsets), so no Python list is built; both run over all threads from
-``PARALLEL_MIN`` particles on. :class:`MirrorImages` keeps the output buffers and grows
-them geometrically.
+``PARALLEL_MIN`` particles on. :class:`.images.MirrorImages` keeps the output buffers and
+grows them geometrically; the kernels of a moving tank are in :mod:`.moving`.
 
-The passes take their arguments as records (named tuples): the fluid as
+The passes take their arguments as records (named tuples, :mod:`.records`): the fluid as
 :class:`sphcore.api.Fields`, the wall planes as a :class:`PlaneGroup`, the image rule as a
 :class:`MirrorRule`, the ghost state's constants as a :class:`GhostPressure`, the motion of
 moving walls as a :class:`WallMotion`, the per-particle bookkeeping of the passes as
@@ -75,12 +75,10 @@ passed on to the helpers called per particle, 1.2 to 1.5 times slower (measured)
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 from numba import njit, prange
 
-from sphcore.api import FLUID, Sources, eos, plane_distance
+from sphcore.api import FLUID, eos, plane_distance
 
 #: smallest base (p - p_b)/B + 1 of the inverse Tait equation: keeps rho_g real and
 #: positive (>= 0.37 rho0 for gamma = 7) under strong tension
@@ -100,136 +98,8 @@ PARALLEL_MIN = 250_000
 TOL_REL = 1e-9
 
 
-class PlaneGroup(NamedTuple):
-    """One group of wall planes n . X = offset, each normal pointing into the domain.
-
-    ``normals`` (k, dim) float64: unit normals; ``offsets`` (k,) float64: n . X0 (m) for a
-    point X0 of each plane. Fixed walls: the case's planes; walls that move: the planes
-    where they are at the force evaluation's time, with a :class:`WallMotion` beside them.
-    """
-
-    normals: np.ndarray
-    offsets: np.ndarray
-
-
-class WallMotion(NamedTuple):
-    """The rigid motion of the wall planes at one instant (all (3,) float64, zero-padded
-    in 2D): the point of the walls now at x moves with v_w = ``velocity`` + ``omega`` x r
-    and accelerates with a_w = ``acceleration`` + ``alpha`` x r + ``omega`` x (``omega`` x
-    r), r = x - ``origin`` (m/s, rad/s, m/s^2, rad/s^2; the origin is the centre of
-    rotation where it is now, c + D of :class:`sphcore.geometry.motion.Pose`).
-    """
-
-    origin: np.ndarray
-    velocity: np.ndarray
-    omega: np.ndarray
-    acceleration: np.ndarray
-    alpha: np.ndarray
-
-    @classmethod
-    def of(cls, pose) -> WallMotion:
-        """The motion of the walls at a :class:`sphcore.geometry.motion.Pose`."""
-        def pad(v):
-            out = np.zeros(3)
-            v = np.asarray(v, dtype=np.float64).ravel()
-            out[: v.size] = v
-            return out
-
-        return cls(pad(np.asarray(pose.centre) + np.asarray(pose.shift)), pad(pose.velocity), pad(pose.omega),
-                   pad(pose.acceleration), pad(pose.alpha))
-
-
-class MirrorRule(NamedTuple):
-    """Which images are made, and how their velocity follows.
-
-    ``support`` (m): the kernel support 2h; a plane closer than this to a fluid particle
-    mirrors it. ``tol`` (m): a particle closer than this to a plane makes no image across
-    it (an image on top of itself), and an image must lie farther than this behind some
-    plane to be kept. ``max_order``: the most planes one image is mirrored across.
-    ``free_slip``: True mirrors the velocity with the position (normal component
-    reversed), False reverses it whole (no slip).
-    """
-
-    support: float
-    tol: float
-    max_order: int
-    free_slip: bool
-
-
-class GhostPressure(NamedTuple):
-    """Constants of the images' pressure and density (module docstring).
-
-    ``hydrostatic``: add the hydrostatic correction (rho_i - rho_ref) g . (x_g - x_i) to
-    the ghost pressure and take the density from it by the inverse Tait equation; else
-    copy p_i and rho_i. ``gravity`` (3,) float64 (m/s^2), zero-padded in 2D. ``rho_ref``
-    (kg/m^3): rho0 when the pressure is the modified (dynamic) one, else 0. ``rho0``
-    (kg/m^3), ``b`` (Pa) = c0^2 rho0 / gamma, ``inv_gamma`` = 1 / gamma, ``p_background``
-    (Pa), ``c0`` (m/s) and ``gamma``: the fluid's Tait constants (b = 0: no correction, as
-    without SPH); b and inv_gamma are derived from c0 and gamma, and the fixed-wall pass
-    derives them again in its kernel (see :func:`_fill_pass`).
-    """
-
-    hydrostatic: bool
-    gravity: np.ndarray
-    rho_ref: float
-    rho0: float
-    b: float
-    inv_gamma: float
-    p_background: float
-    c0: float
-    gamma: float
-
-
-class Passes(NamedTuple):
-    """Per-particle bookkeeping of the two passes, for n particles (int64 arrays).
-
-    ``near`` (n,): bit k set when plane k lies within the support of fluid particle i;
-    ``counts`` (n,): its kept images; ``start`` (n + 1,): the exclusive prefix sum of
-    counts, the first output row of each particle's images.
-    """
-
-    near: np.ndarray
-    counts: np.ndarray
-    start: np.ndarray
-
-
-class Images(NamedTuple):
-    """Output buffers of the ghosts, one row per image (rows beyond the total unused).
-
-    ``pos`` (cap, dim) m, ``vel`` (cap, dim) m/s, ``rho`` (cap,) kg/m^3, ``p`` (cap,) Pa,
-    ``m`` (cap,) kg: the ghost's fields as :class:`sphcore.api.Fields`; ``src`` (cap,)
-    int64: index of the fluid particle it mirrors.
-    """
-
-    pos: np.ndarray
-    vel: np.ndarray
-    rho: np.ndarray
-    p: np.ndarray
-    m: np.ndarray
-    src: np.ndarray
-
-
-class FluidConstants(NamedTuple):
-    """The run's constants :meth:`MirrorImages.generate` reads (the same names as in
-    :class:`sphcore.api.Params`, which may be passed instead).
-
-    ``support`` (m): kernel support 2h; ``gravity`` (3,) or (dim,) m/s^2; ``rho0``
-    (kg/m^3), ``c0`` (m/s), ``gamma``, ``p_background`` (Pa): the Tait constants;
-    ``rho_ref`` (kg/m^3): rho0 when the pressure is the modified one, else 0.
-    """
-
-    support: float
-    gravity: np.ndarray
-    rho0: float
-    c0: float
-    gamma: float
-    p_background: float = 0.0
-    rho_ref: float = 0.0
-
-
-
 @njit(cache=True, inline="always")
-def _popcount(mask):
+def popcount(mask):
     c = 0
     while mask:
         c += mask & 1
@@ -275,72 +145,7 @@ def _image(pos, vel, i, normals, offsets, sub, free_slip, tol):
 
 
 @njit(cache=True, inline="always")
-def _wall_velocity(motion, x0, x1, x2):
-    """(vx, vy, vz) of the wall point now at (x0, x1, x2): V + Omega x r (:class:`WallMotion`)."""
-    o, w, v = motion.origin, motion.omega, motion.velocity
-    r0, r1, r2 = x0 - o[0], x1 - o[1], x2 - o[2]
-    return (v[0] + w[1] * r2 - w[2] * r1,
-            v[1] + w[2] * r0 - w[0] * r2,
-            v[2] + w[0] * r1 - w[1] * r0)
-
-
-@njit(cache=True, inline="always")
-def _wall_acceleration(motion, x0, x1, x2):
-    """(ax, ay, az) of the wall point now at (x0, x1, x2): A + alpha x r + Omega x (Omega x r)."""
-    o, w, al, a = motion.origin, motion.omega, motion.alpha, motion.acceleration
-    r0, r1, r2 = x0 - o[0], x1 - o[1], x2 - o[2]
-    c0 = w[1] * r2 - w[2] * r1  # Omega x r
-    c1 = w[2] * r0 - w[0] * r2
-    c2 = w[0] * r1 - w[1] * r0
-    return (a[0] + al[1] * r2 - al[2] * r1 + w[1] * c2 - w[2] * c1,
-            a[1] + al[2] * r0 - al[0] * r2 + w[2] * c0 - w[0] * c2,
-            a[2] + al[0] * r1 - al[1] * r0 + w[0] * c1 - w[1] * c0)
-
-
-@njit(cache=True, inline="always")
-def _image_moving(fluid, i, walls, sub, rule, motion):
-    """:func:`_image` with walls that move as ``motion`` (:class:`WallMotion`): the same
-    position and keep; free slip reflects the velocity relative to the wall point at the
-    foot of each plane's mirroring, no slip gives 2 v_w(m) - v_i, m the midpoint of the
-    particle and its image (module docstring)."""
-    pos, vel = fluid.pos, fluid.vel
-    normals, offsets = walls.normals, walls.offsets
-    free_slip, tol = rule.free_slip, rule.tol
-    dim = pos.shape[1]
-    x0, x1 = pos[i, 0], pos[i, 1]
-    v0, v1 = vel[i, 0], vel[i, 1]
-    x2 = pos[i, 2] if dim == 3 else 0.0
-    v2 = vel[i, 2] if dim == 3 else 0.0
-    k = 0
-    s = sub
-    while s:
-        if s & 1:
-            n0, n1 = normals[k, 0], normals[k, 1]
-            n2 = normals[k, 2] if dim == 3 else 0.0
-            d = plane_distance(normals, offsets, k, x0, x1, x2)
-            if free_slip:
-                w0, w1, w2 = _wall_velocity(motion, x0 - d * n0, x1 - d * n1, x2 - d * n2)
-                vn = (v0 - w0) * n0 + (v1 - w1) * n1 + (v2 - w2) * n2
-                v0 -= 2.0 * vn * n0
-                v1 -= 2.0 * vn * n1
-                v2 -= 2.0 * vn * n2
-            x0 -= 2.0 * d * n0
-            x1 -= 2.0 * d * n1
-            x2 -= 2.0 * d * n2
-        s >>= 1
-        k += 1
-    if not free_slip:
-        xi2 = pos[i, 2] if dim == 3 else 0.0
-        w0, w1, w2 = _wall_velocity(motion, 0.5 * (pos[i, 0] + x0), 0.5 * (pos[i, 1] + x1), 0.5 * (xi2 + x2))
-        v0, v1, v2 = 2.0 * w0 - v0, 2.0 * w1 - v1, 2.0 * w2 - v2
-    dmin = np.inf
-    for k in range(normals.shape[0]):
-        dmin = min(dmin, plane_distance(normals, offsets, k, x0, x1, x2))
-    return dmin < -tol, x0, x1, x2, v0, v1, v2
-
-
-@njit(cache=True, inline="always")
-def _near_chunk(pos, kind, normals, offsets, support, tol, near, lo, hi):
+def near_chunk(pos, kind, normals, offsets, support, tol, near, lo, hi):
     """near[i] for lo <= i < hi: bit k set when tol < d_k < support (0 for non-fluid).
 
     Plane by plane over a chunk of particles: the inner loop has no data-dependent
@@ -375,7 +180,7 @@ def _count_one(pos, vel, i, near, normals, offsets, max_order, free_slip, tol):
     c = 0
     sub = near
     while sub:  # every non-empty subset of the near planes
-        if _popcount(sub) <= max_order:
+        if popcount(sub) <= max_order:
             if _image(pos, vel, i, normals, offsets, sub, free_slip, tol)[0]:
                 c += 1
         sub = (sub - 1) & near
@@ -393,7 +198,7 @@ def _count_pass(pos, vel, kind, normals, offsets, support, max_order, free_slip,
     non-fluid), counts[i] = number of its kept images."""
     n = pos.shape[0]
     for c in prange((n + CHUNK - 1) // CHUNK):
-        _near_chunk(pos, kind, normals, offsets, support, tol, near, c * CHUNK, min(n, (c + 1) * CHUNK))
+        near_chunk(pos, kind, normals, offsets, support, tol, near, c * CHUNK, min(n, (c + 1) * CHUNK))
     for i in prange(n):
         counts[i] = _count_one(pos, vel, i, near[i], normals, offsets, max_order, free_slip, tol) if near[i] else 0
 
@@ -402,7 +207,7 @@ def _count_pass(pos, vel, kind, normals, offsets, support, max_order, free_slip,
 def _count_pass_serial(pos, vel, kind, normals, offsets, support, max_order, free_slip, tol, near, counts):
     """:func:`_count_pass` on one thread (small particle counts: no thread start-up)."""
     n = pos.shape[0]
-    _near_chunk(pos, kind, normals, offsets, support, tol, near, 0, n)
+    near_chunk(pos, kind, normals, offsets, support, tol, near, 0, n)
     for i in range(n):
         counts[i] = _count_one(pos, vel, i, near[i], normals, offsets, max_order, free_slip, tol) if near[i] else 0
 
@@ -443,7 +248,7 @@ def _fill_one(pos, vel, rho, p, m, i, near, normals, offsets, max_order, free_sl
     dim = pos.shape[1]
     sub = near
     while sub:
-        if _popcount(sub) <= max_order:
+        if popcount(sub) <= max_order:
             keep, x0, x1, x2, v0, v1, v2 = _image(pos, vel, i, normals, offsets, sub, free_slip, tol)
             if keep:
                 gpos[j, 0] = x0
@@ -516,158 +321,3 @@ def _fill_by(kernel, fluid, walls, rule, ghost, passes, out):
            rule.max_order, rule.free_slip, rule.tol, ghost.hydrostatic, ghost.gravity, ghost.rho0, ghost.c0,
            ghost.gamma, ghost.p_background, ghost.rho_ref, passes.start, out.pos, out.vel, out.rho, out.p, out.m,
            out.src)
-
-
-@njit(cache=True, inline="always")
-def _fill_one_moving(fluid, i, near, walls, rule, ghost, motion, j, out):
-    """:func:`_fill_one` with walls that move as ``motion`` (:class:`WallMotion`): velocity
-    by :func:`_image_moving`, and the hydrostatic correction with g - a_w (Adami, Hu & Adams
-    2012, Eq. 27; module docstring)."""
-    pos, rho, p, m = fluid.pos, fluid.rho, fluid.p, fluid.m
-    gpos, gvel, grho, gp, gm, gsrc = out.pos, out.vel, out.rho, out.p, out.m, out.src
-    gravity, b = ghost.gravity, ghost.b
-    hydrostatic, rho_ref = ghost.hydrostatic, ghost.rho_ref
-    max_order = rule.max_order
-    dim = pos.shape[1]
-    xi0, xi1 = pos[i, 0], pos[i, 1]
-    xi2 = pos[i, 2] if dim == 3 else 0.0
-    sub = near
-    while sub:
-        if _popcount(sub) <= max_order:
-            keep, x0, x1, x2, v0, v1, v2 = _image_moving(fluid, i, walls, sub, rule, motion)
-            if keep:
-                gpos[j, 0] = x0
-                gpos[j, 1] = x1
-                gvel[j, 0] = v0
-                gvel[j, 1] = v1
-                if dim == 3:
-                    gpos[j, 2] = x2
-                    gvel[j, 2] = v2
-                if hydrostatic and b > 0.0:
-                    e0, e1, e2 = x0 - xi0, x1 - xi1, x2 - xi2
-                    rise = gravity[0] * e0 + gravity[1] * e1 + gravity[2] * e2
-                    a0, a1, a2 = _wall_acceleration(motion, xi0 + 0.5 * e0, xi1 + 0.5 * e1, xi2 + 0.5 * e2)
-                    # grad p = rho (g - a_w) in water at rest relative to the wall; the
-                    # modified pressure removes rho0 g only, so a_w counts with all of rho_i
-                    pg = p[i] + (rho[i] - rho_ref) * rise - rho[i] * (a0 * e0 + a1 * e1 + a2 * e2)
-                    gp[j] = pg
-                    grho[j] = eos.density(pg, ghost.rho0, b, ghost.inv_gamma, ghost.p_background)
-                else:
-                    gp[j] = p[i]
-                    grho[j] = rho[i]
-                gm[j] = m[i]
-                gsrc[j] = i
-                j += 1
-        sub = (sub - 1) & near
-
-
-@njit(cache=True, parallel=True)
-def fill_images_moving(fluid, walls, rule, ghost, motion, passes, out):
-    """:func:`fill_images` with walls that move as ``motion`` (:class:`WallMotion`);
-    ``walls``: the planes where they are now."""
-    near, start = passes.near, passes.start
-    for i in prange(fluid.pos.shape[0]):
-        if start[i + 1] > start[i]:
-            _fill_one_moving(fluid, i, near[i], walls, rule, ghost, motion, start[i], out)
-
-
-@njit(cache=True)
-def fill_images_moving_serial(fluid, walls, rule, ghost, motion, passes, out):
-    """:func:`fill_images_moving` on one thread."""
-    near, start = passes.near, passes.start
-    for i in range(fluid.pos.shape[0]):
-        if start[i + 1] > start[i]:
-            _fill_one_moving(fluid, i, near[i], walls, rule, ghost, motion, start[i], out)
-
-
-class MirrorImages:
-    """Ghost generator for one set of planes, with output buffers reused between calls.
-
-    ``normals`` (k, dim) unit vectors into the domain, ``offsets`` (k,) n . X0 (m).
-    ``free_slip`` selects the velocity rule, ``hydrostatic`` the pressure correction.
-    ``max_order`` is the largest number of planes one image is mirrored across (dim by
-    default: corners in 2D, corners and edges in 3D).
-    """
-
-    def __init__(self, normals, offsets, free_slip=True, hydrostatic=True, max_order=None):
-        self.walls = PlaneGroup(np.ascontiguousarray(normals, dtype=np.float64),
-                                np.ascontiguousarray(offsets, dtype=np.float64))
-        if self.walls.normals.shape[0] > MAX_PLANES:
-            raise ValueError(f"at most {MAX_PLANES} wall planes, got {self.walls.normals.shape[0]}")
-        self.dim = self.walls.normals.shape[1]
-        self.free_slip, self.hydrostatic = bool(free_slip), bool(hydrostatic)
-        self.max_order = self.dim if max_order is None else int(max_order)
-        self.n = 0  # ghosts made by the last call
-        self.capacity = 0
-        self.reallocations = 0
-        self._passes = Passes(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(1, np.int64))
-        self._alloc(0)
-
-    def _alloc(self, cap):
-        dim = self.dim
-        self.capacity = cap
-        self._out = Images(np.zeros((cap, dim)), np.zeros((cap, dim)), np.zeros(cap), np.zeros(cap), np.zeros(cap),
-                           np.zeros(cap, np.int64))
-
-    def generate(self, fluid, kind, constants, walls=None, motion=None):
-        """Ghosts of the current fluid as :class:`sphcore.api.Sources`.
-
-        ``fluid``: :class:`sphcore.api.Fields` of the particles (pos m, vel m/s, rho
-        kg/m^3, m kg; p the pressure the momentum equation uses, Pa); ``kind`` (n,) int8
-        codes (only FLUID particles are mirrored); ``constants``: a :class:`FluidConstants`
-        or the run's :class:`sphcore.api.Params` (support, gravity, rho0, c0, gamma,
-        p_background, rho_ref). Walls that move: ``walls``, a :class:`PlaneGroup` of the
-        planes where they are now (the same planes in the same order as at construction),
-        and ``motion``, their :class:`WallMotion` now; without ``motion`` the images are
-        those of fixed walls (the fixed-wall kernels). The arrays returned are views of
-        this object's buffers, valid until the next call (the core copies them into its
-        source arrays).
-        """
-        walls = self.walls if walls is None else walls
-        if walls.normals.shape != self.walls.normals.shape:
-            raise ValueError(f"expected {self.walls.normals.shape[0]} planes in {self.dim}D, got normals of shape "
-                             f"{walls.normals.shape}")
-        n = fluid.pos.shape[0]
-        if self._passes.counts.shape[0] != n:
-            self._passes = Passes(np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n + 1, np.int64))
-        passes = self._passes
-        support = constants.support
-        rule = MirrorRule(float(support), TOL_REL * support, self.max_order, self.free_slip)
-        parallel = n >= PARALLEL_MIN
-        count = count_images if parallel else count_images_serial
-        fill = fill_images if parallel else fill_images_serial
-        count(fluid, kind, walls, rule, passes)
-        total = int(exclusive_scan(passes.counts, passes.start))
-        if total > self.capacity:
-            # geometric growth: a wave running up a wall raises the count a little at a time
-            self._alloc(max(total, int(1.5 * self.capacity) + 64))
-            self.reallocations += 1
-        rho0, c0, gamma = float(constants.rho0), float(constants.c0), float(constants.gamma)
-        ghost = GhostPressure(self.hydrostatic, self._gravity(constants.gravity), float(constants.rho_ref), rho0,
-                              float(eos.tait_b(c0, rho0, gamma)), 1.0 / gamma, float(constants.p_background), c0, gamma)
-        if motion is None:
-            fill(fluid, walls, rule, ghost, passes, self._out)
-        else:
-            fill = fill_images_moving if parallel else fill_images_moving_serial
-            fill(fluid, walls, rule, ghost, motion, passes, self._out)
-        self.n = total
-        out = self._out
-        return Sources(out.pos[:total], out.vel[:total], out.rho[:total], out.p[:total], out.m[:total])
-
-    @staticmethod
-    def _gravity(g):
-        """(3,) float64, zero-padded: the core's ctx.params.gravity already is; tests may pass (dim,)."""
-        out = np.zeros(3)
-        g = np.asarray(g, dtype=np.float64).ravel()
-        out[: g.size] = g
-        return out
-
-    @property
-    def source_index(self) -> np.ndarray:
-        """Index (into the arrays of the last call) of the particle each ghost mirrors."""
-        return self._out.src[: self.n]
-
-
-def inverse_tait(p, rho0, c0, gamma, p_background=0.0):
-    """Density (kg/m^3) whose Tait pressure is p (Pa), base clamped (numpy arrays)."""
-    return eos.density_of(p, rho0, c0, gamma, p_background)
