@@ -45,6 +45,8 @@ PROBED = case_with(TANK, {"domain.max": [0.2, 0.4], "blocks[0].max": [0.2, 0.3],
 
 # what each script needs besides the path it reads
 EXTRA = {"peer_series.py": ["--reference", "buchner_2002_P1", "--H", "0.3"]}
+#: sub-commands that come before the run's path
+FIRST = {"sloshing.py": ["free"]}
 
 
 @pytest.fixture(scope="module")
@@ -107,7 +109,7 @@ def test_no_script_edits_sys_path_or_guesses_its_imports():
 @pytest.mark.parametrize("name", TOOLKIT)
 def test_an_empty_or_missing_directory_is_refused(tmp_path, name):
     for path in (tmp_path, tmp_path / "missing"):
-        refused(script(name, path, *EXTRA.get(name, [])), name, path)
+        refused(script(name, *FIRST.get(name, []), path, *EXTRA.get(name, [])), name, path)
 
 
 # ---------------------------------------------------------------------------- frames: wavefront, pressure profile
