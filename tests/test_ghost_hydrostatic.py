@@ -140,9 +140,9 @@ def test_tank_stays_mirror_symmetric(still_water):
 def test_undamped_start_keeps_the_surface_and_stays_near_hydrostatic(tmp_path):
     # no relaxation: the core's hydrostatic start is the discrete equilibrium below the free
     # surface's reach, not in the top layers (their kernels are truncated by the air), and
-    # the column rings about it, weakly damped (measured over 0.5 s with the start used
-    # until 2026-11-24: surface within 0.001 dx; pressure error largest 3 layers below the
-    # surface, 3.9 % in the first 10 ms, 2.7 % by 0.5 s, 2.4 % by 1 s)
+    # the column rings about it, weakly damped (measured over 0.5 s with a start of equal
+    # masses: surface within 0.001 dx; pressure error largest 3 layers below the surface,
+    # 3.9 % in the first 10 ms, 2.7 % by 0.5 s, 2.4 % by 1 s)
     sim = make_sim(tank_case(tmp_path / "ring", ["ghost"]))
     start = by_id(sim.state)
     top = start["pos"][:, 1] > H - DX

@@ -4,7 +4,7 @@ equilibrium of the SPH sums on the initial lattice.
 Known answers: p(d) solves dp/dd = rho(p) g with p(0) = 0 and tends to rho0 g d for a
 stiff fluid; in a tank at rest with plain Tait pressure and the wall model, every particle
 below the free surface's reach starts with the same vertical acceleration, the lattice
-normalisation's (lambda - 1) g, side walls and floor included (until 2026-11-24 it drifted
+normalisation's (lambda - 1) g, side walls and floor included (with equal masses it drifted
 with depth and differed along the side walls).
 """
 
@@ -64,8 +64,8 @@ def test_a_tank_at_rest_starts_in_the_discrete_equilibrium(tmp_path, h_over_dx):
     """One force evaluation at t = 0: below the free surface's reach (2h + dx), every
     particle's vertical acceleration is (lambda - 1) g, to 1e-5 g beyond the floor's reach
     (the columns along the side walls included) and 1e-4 g within it (the wall tables'
-    interpolation in the wall distances), and none is pushed sideways by more than 5e-5 g. With the start
-    used until 2026-11-24 the deep rows drifted by up to 0.014 g and the wall columns
+    interpolation in the wall distances), and none is pushed sideways by more than 5e-5 g. With a start
+    of equal masses the deep rows drifted by up to 0.014 g and the wall columns
     differed by 0.004 g (docs/wall_pressure.md)."""
     case, pm = runner.load(write_case(tmp_path / "tank", tank(h_over_dx)))
     sim = build(case, pm)

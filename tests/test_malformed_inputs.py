@@ -1,4 +1,4 @@
-"""Every malformed input a clean exit 2 (issue 13): case files generated from the option
+"""Every malformed input a clean exit 2: case files generated from the option
 declarations (every option's wrong types and out-of-range values) and a table of the rest
 (non-UTF-8, binary, nested 2,000 deep, a link to /dev/zero, beyond int64, subnormal, more
 memory than the machine has, a step below round-off, an output directory outside the case,

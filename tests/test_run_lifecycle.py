@@ -319,7 +319,7 @@ def test_existing_output_is_refused_and_overwrite_replaces_only_sph_output(case_
     assert snapshot(out) == before
 
     # --overwrite replaces what sph wrote: nothing of the old run remains, but a file the
-    # user added (not in the marker's manifest) is kept, even among the frames (issue 13)
+    # user added (not in the marker's manifest) is kept, even among the frames
     (out / "vtu" / "mine.vtu").write_text("the user's")
     old_frames = sorted(os.listdir(out / "vtu"))
     assert cli_run(capsys, *args[:-1], "0.01", "--overwrite")[0] == 0

@@ -1,4 +1,4 @@
-"""Runs that survive anything (issue 13): SIGKILL at random moments then ``--restart`` bit
+"""Runs that survive anything: SIGKILL at random moments then ``--restart`` bit
 for bit, periodic checkpoints, a restart that refuses another run's checkpoint, an
 overwrite that never deletes a user's file, and a full disk at every write point.
 

@@ -78,6 +78,12 @@ def _ramped(ramp: Ramp, t: float, q, q1, q2):
     return s * q, s1 * q + s * q1, s2 * q + 2.0 * s1 * q1 + s * q2
 
 
+def _sine(amplitude, omega, phase, t):
+    """(q, q', q'') of q = amplitude sin(omega t + phase)."""
+    arg = omega * t + phase
+    return amplitude * math.sin(arg), amplitude * omega * math.cos(arg), -amplitude * omega ** 2 * math.sin(arg)
+
+
 # -- time series --------------------------------------------------------------------------------
 
 
@@ -156,11 +162,7 @@ class SineTranslation:
     ramp: Ramp = Ramp()
 
     def translation(self, t: float):
-        arg = self.omega * t + self.phase
-        q = self.amplitude * math.sin(arg)
-        q1 = self.amplitude * self.omega * math.cos(arg)
-        q2 = -self.amplitude * self.omega ** 2 * math.sin(arg)
-        q, q1, q2 = _ramped(self.ramp, t, q, q1, q2)
+        q, q1, q2 = _ramped(self.ramp, t, *_sine(self.amplitude, self.omega, self.phase, t))
         return q * self.axis, q1 * self.axis, q2 * self.axis
 
 
@@ -186,11 +188,7 @@ class SineRotation:
     ramp: Ramp = Ramp()
 
     def angle(self, t: float):
-        arg = self.omega * t + self.phase
-        q = self.amplitude * math.sin(arg)
-        q1 = self.amplitude * self.omega * math.cos(arg)
-        q2 = -self.amplitude * self.omega ** 2 * math.sin(arg)
-        return _ramped(self.ramp, t, q, q1, q2)
+        return _ramped(self.ramp, t, *_sine(self.amplitude, self.omega, self.phase, t))
 
 
 @dataclass(frozen=True)
