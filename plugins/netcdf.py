@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 import sphcore
-from sphcore.api import FLUID, GHOST, SPHERE, OutputError, ScheduledWriter, hookimpl
+from sphcore.api import FLUID, GHOST, SPHERE, OutputError, ScheduledWriter, hookimpl, mark_written
 
 if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
     import netCDF4
@@ -119,6 +119,7 @@ def new_dataset(path: Path, title: str, comment: str, attrs: dict) -> netCDF4.Da
     attributes (Conventions, title, source, history, comment, then ``attrs``); the
     particle and probe files of a run share it. A failure is an OutputError naming the file."""
     import netCDF4
+    mark_written(path)  # sph's from now on, whatever happens next (the marker lists it)
     try:
         ds = netCDF4.Dataset(path, "w", format=FORMAT)
     except (OSError, RuntimeError) as err:

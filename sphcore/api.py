@@ -24,7 +24,8 @@
   a launch on several would cost more than the work);
 - the equation of state: :mod:`sphcore.physics.eos` as :data:`eos`;
 - output: :class:`ScheduledWriter` (base of a writer plugin: schedule, restart, write errors),
-  :class:`Schedule`, :func:`write_atomically` (a file replaced whole or not at all).
+  :class:`Schedule`, :func:`write_atomically` (a file replaced whole or not at all),
+  :func:`mark_written` (a file written by other means is sph's: ``--overwrite`` deletes it).
 
 Hook specifications: :mod:`sphcore.plugin.hookspecs`. A plugin template: ``examples/plugin_template``.
 """
@@ -38,7 +39,7 @@ from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
 from sphcore.geometry.faces import Faces
 from sphcore.geometry.motion import Motion, MovingGroup, Pose
 from sphcore.geometry.planes import Planes, outline, particle_distance, plane_distance
-from sphcore.io.atomic import write_atomically
+from sphcore.io.atomic import mark_written, write_atomically
 from sphcore.io.schedule import Schedule, schedule_options
 from sphcore.io.writer import ScheduledWriter
 from sphcore.jit.parallel import by_size, on_threads_by_size
@@ -58,5 +59,5 @@ __all__ = [
     "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "face_distance", "first_contact",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
     "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",
-    "eos", "ScheduledWriter", "Schedule", "schedule_options", "write_atomically", "by_size", "on_threads_by_size",
+    "eos", "ScheduledWriter", "Schedule", "schedule_options", "write_atomically", "mark_written", "by_size", "on_threads_by_size",
 ]

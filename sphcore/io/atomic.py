@@ -6,6 +6,11 @@ same directory, so the rename is atomic on one file system); it is flushed to th
 VTU frame) and renamed over ``path``. A reader, a crash or a full disk sees the old file or
 the new one, never half of one; a failure removes the temporary file and raises
 :class:`sphcore.errors.OutputError` naming ``path``.
+
+Every file written here is announced (:func:`mark_written`) to the output directories open
+in this process (:class:`sphcore.io.outdir.Manifest`), whose marker lists exactly what sph
+wrote, so that ``--overwrite`` deletes those files and no other. A writer that makes a file
+by other means (a netCDF library) calls :func:`mark_written` itself.
 """
 
 from __future__ import annotations
@@ -14,6 +19,27 @@ import os
 from pathlib import Path
 
 from sphcore.errors import OutputError
+
+
+#: called with the path of each file sph writes (the open output directories' manifests)
+_LISTENERS: list = []
+
+
+def mark_written(path) -> None:
+    """Record that sph created or replaced the file ``path`` (the output directory's marker
+    lists it: ``--overwrite`` deletes only such files)."""
+    for listener in list(_LISTENERS):
+        listener(Path(path))
+
+
+def listen(listener) -> None:
+    """Call ``listener(path)`` for every file written from now on (until :func:`forget`)."""
+    _LISTENERS.append(listener)
+
+
+def forget(listener) -> None:
+    if listener in _LISTENERS:
+        _LISTENERS.remove(listener)
 
 
 def temporary_name(path: Path) -> Path:
@@ -39,6 +65,7 @@ def write_atomically(path: Path, write, fsync: bool = True, what: str = "") -> N
         except OSError:
             pass  # the directory itself is unwritable: nothing was left behind
         raise OutputError(f"{path}: cannot write{' ' + what if what else ''}: {e.strerror or e}") from e
+    mark_written(path)
 
 
 def write_text_atomically(path: Path, text: str, fsync: bool = True) -> None:

@@ -11,9 +11,11 @@ directory (a marker copied elsewhere names another one) and this case; it then d
 the regular files it lists (never through a symbolic link, never outside the directory)
 and the listed directories left empty. Anything else in the directory (a user's plot, a
 note, files copied in) is kept. The manifest is brought up to date with every checkpoint
-and at the end of a run: it records the files already listed plus every file modified
-since the run (segment) began, so files that were there before (a user's, kept through an
-overwrite) stay out of it.
+and at the end of a run: it records the files already listed plus every file this process
+wrote there since the run (segment) began, as each write announces it
+(:func:`sphcore.io.atomic.mark_written`), never by modification times: a file a user saves
+into the directory while the run goes on is not sph's and stays out of it. Entries that
+are not relative paths (a hand-edited marker) name no file and are ignored.
 """
 
 from __future__ import annotations
@@ -23,10 +25,10 @@ import fcntl
 import json
 import os
 import sys
-import time
 from pathlib import Path
 
 from sphcore.errors import CaseError, OutputError
+from sphcore.io import atomic
 from sphcore.io.atomic import temporary_name, write_text_atomically
 
 MARKER = ".sphcore-output"
@@ -70,6 +72,11 @@ def read_marker(out: Path) -> dict | None:
         return None
     if not isinstance(data.get("files"), list) or not isinstance(data.get("dirs"), list):
         return None
+    for key in ("files", "dirs"):  # an entry that is not a relative path names no file of the run
+        data[key] = [r for r in data[key] if isinstance(r, str) and r and "\0" not in r]
+    for key in ("dir", "case"):
+        if not isinstance(data.get(key, ""), str):
+            data[key] = repr(data[key])
     return data
 
 
@@ -158,40 +165,41 @@ class WriterLock:
 
 class Manifest:
     """Keeps the marker's list of sph's files up to date during one run segment, and holds
-    the directory's writer lock until :meth:`release`."""
+    the directory's writer lock until :meth:`release`. Listens, until then, to every file
+    this process writes (:func:`sphcore.io.atomic.mark_written`) and records those inside
+    the directory."""
 
     def __init__(self, out: Path, case_file=None, lock: WriterLock | None = None):
         self.out = Path(out)
         self.lock = lock
         self.case = _identity(case_file)
-        self.start_ns = time.time_ns() - 2_000_000_000  # coarse file-system clocks: 2 s slack
+        self._root = os.path.realpath(self.out)
         old = read_marker(self.out) or {}
         self.files = set(old.get("files", []))
         self.dirs = set(old.get("dirs", []))
+        atomic.listen(self.wrote)
+
+    def wrote(self, path: Path) -> None:
+        """Record ``path`` (a file sph created or replaced) when it lies in this directory."""
+        full = os.path.join(os.path.realpath(os.path.dirname(os.path.abspath(path))), os.path.basename(path))
+        rel = os.path.relpath(full, self._root)
+        if rel.startswith(os.pardir + os.sep) or rel in (os.pardir, os.curdir, MARKER, LOCK):
+            return
+        self.files.add(rel)
+        parent = os.path.dirname(rel)
+        while parent:
+            self.dirs.add(parent)
+            parent = os.path.dirname(parent)
 
     def update(self) -> None:
-        """Record every file listed before plus every file modified in this segment."""
-        for root, dirnames, filenames in os.walk(self.out):
-            rel_root = os.path.relpath(root, self.out)
-            for d in dirnames:
-                if not os.path.islink(os.path.join(root, d)):
-                    self.dirs.add(os.path.normpath(os.path.join(rel_root, d)))
-            for name in filenames:
-                full = os.path.join(root, name)
-                try:
-                    st = os.lstat(full)
-                except OSError:
-                    continue
-                rel = os.path.normpath(os.path.join(rel_root, name))
-                if rel in (MARKER, LOCK) or not os.path.isfile(full) or os.path.islink(full):
-                    continue
-                if st.st_mtime_ns >= self.start_ns:
-                    self.files.add(rel)
+        """Write the marker: the files listed before plus those written in this segment
+        that still exist."""
         self.files = {f for f in self.files if os.path.lexists(self.out / f)}
         self.write()
 
     def release(self) -> None:
         """Let another run write this directory (the end of the run)."""
+        atomic.forget(self.wrote)
         if self.lock is not None:
             self.lock.release()
 
