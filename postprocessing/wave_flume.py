@@ -30,9 +30,13 @@ amplitude varies across the window). The script prints the window, the number of
 H, H/S measured and Biesel's and the relative error per gauge, the decay of H along the
 flume (an exponential fitted over the gauges, with its value extrapolated back to the
 piston: a diagnostic of the damping on the way, not theory), and, with wall_loads.csv, the
-mean and the first-harmonic amplitude (a least-squares fit at omega) of the horizontal
-force on the piston after the ramp (N/m in 2D). A path that is not a run of a piston
-flume: one line on stderr, exit status 2.
+horizontal force on the piston (N/m in 2D) in the window of a gauge at x = 0 (the ramp's end
+to the far wall's reflection's return or the run's end): its mean and the amplitude and
+phase against the displacement of its first harmonic (a least-squares fit at omega; the
+mean, the still water's force, drops out), over the window and over each whole period in
+it, beside Havelock's linear force (havelock: radiation damping and added mass) and the
+relative difference. A path that is not a run of a piston flume: one line on stderr, exit
+status 2.
 
     python postprocessing/wave_flume.py cases/wave_flume/output
     python postprocessing/wave_flume.py cases/wave_flume/output cases/wave_flume_kh18/output
@@ -82,6 +86,62 @@ def group_velocity(k, h, g=9.81):
     return 0.5 * c * (1.0 + 2.0 * kh / math.sinh(2.0 * kh))
 
 
+def evanescent_wavenumbers(omega, h, n, g=9.81):
+    """k_1 .. k_n (1/m) solving omega^2 = -g k tan(k h), k_j h in ((j - 1/2) pi, j pi): by
+    bisection on d = j pi - k_j h in (0, pi/2), where (j pi - d) tan d = omega^2 h / g."""
+    y, jpi = omega * omega * h / g, math.pi * np.arange(1, n + 1)
+    lo, hi = np.zeros(n), np.full(n, 0.5 * math.pi)
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        below = (jpi - mid) * np.tan(mid) < y
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    return (jpi - 0.5 * (lo + hi)) / h
+
+
+def havelock(omega, h, S, g=9.81, rho=1000.0, n=100) -> dict:
+    """The first-harmonic horizontal force per unit width of linear theory on a piston of stroke
+    S, X(t) = S/2 sin(omega t), in water of depth h (Havelock 1929, Phil. Mag. 8, 569; Dean &
+    Dalrymple, Water Wave Mechanics for Engineers and Scientists, ch. 6, piston wave maker).
+
+    With U0 = omega S / 2, the velocity U = U0 cos(omega t) = Re(U0 e^{i omega t}) and the
+    piston's face at x = 0, z from -h (floor) to 0 (still water):
+      phi = Re(Phi e^{i omega t}),  Phi = a0 cosh k(h+z) e^{-ikx} + sum_j aj cos kj(h+z) e^{-kj x}
+      omega^2 = g k tanh kh (the wave going out), omega^2 = -g kj tan kj h (j = 1..n, standing).
+    The modes are orthogonal on -h < z < 0; dPhi/dx = U0 at x = 0 projected on each gives
+      a0 = i U0 P0 / (k N0),   aj = -U0 Pj / (kj Nj),
+      P0 = sinh kh / k,   N0 = (sinh 2kh + 2kh) / (4k),   Pj = sin kj h / kj,   Nj = (sin 2kj h + 2kj h) / (4kj).
+    (a0 gives H/S = 2 (omega/g) |a0| cosh kh / S = Biesel's.) The force the piston exerts on the water,
+      F = int_{-h}^{0} p dz,  p = -rho dphi/dt  (linear dynamic pressure, at x = 0),
+    is F = Re(-i omega rho (a0 P0 + sum aj Pj) e^{i omega t}) = B U + ma dU/dt with
+      B  = rho omega P0^2 / (k N0) = rho omega (H/S) / k^2          (radiation damping, N s/m^2)
+      ma = rho sum_j Pj^2 / (kj Nj)
+         = rho h^2 sum_j 4 sin^2 kj h / ((kj h)^2 (sin 2kj h + 2kj h))  (added mass, kg/m):
+    the wave going out is in phase with the velocity (a0 is imaginary): all the added mass is
+    the standing modes'. Its terms fall as 1/j^5: the tail after n is about y^2 / (2 pi^5 n^4) rho h^2,
+    y = omega^2 h / g (n = 100, kh = 1: 1e-11 rho h^2, a part in 1e9).
+    F(t) = amplitude sin(omega t + phase) with amplitude cos(phase) = -ma omega^2 S/2 and
+    amplitude sin(phase) = B omega S/2 (phase from 90 to 180 degrees); the mean power is B U0^2/2.
+
+    First order throughout: p integrated to z = 0, not to the surface eta (the rest, int_0^eta p dz
+    and the shift of the face by X, are O(S^2)); p = -rho g z - rho dphi/dt, whose hydrostatic
+    part gives the constant rho g h^2 / 2 (not included) and whose dynamic part includes the
+    first-order rise of the water at the face (rho g eta = -rho dphi/dt at z = 0). The water's
+    force on the piston is -F, plus the constant. Limits: B -> rho h sqrt(gh) (kh -> 0),
+    2 rho g^2 / omega^3 (deep); ma/(rho h^2) -> 2 zeta(5) (kh)^4 / pi^5 (kh -> 0),
+    14 zeta(3) / pi^3 = 0.5428 as kh -> infinity (Westergaard's rigid dam, incompressible)."""
+    k = float(wavenumber(omega, h, g))
+    kh = k * h
+    kj = evanescent_wavenumbers(omega, h, n, g)
+    d = math.pi * np.arange(1, n + 1) - kj * h  # sin^2 kj h = sin^2 d, sin 2kj h = -sin 2d: no cancellation
+    ma = rho * h * h * float(np.sum(4.0 * np.sin(d) ** 2 / ((kj * h) ** 2 * (2.0 * kj * h - np.sin(2.0 * d)))))
+    hs = 2.0 * math.tanh(kh) / (1.0 + 2.0 * kh / math.sinh(min(2.0 * kh, 700.0)))  # Biesel's H/S
+    B = rho * omega * hs / (k * k)
+    inertia, radiation = ma * omega * omega * 0.5 * S, B * omega * 0.5 * S
+    return {"k": k, "kh": kh, "kj": kj, "added_mass": ma, "damping": B, "inertia": inertia,
+            "radiation": radiation, "amplitude": math.hypot(inertia, radiation),
+            "phase": math.atan2(radiation, -inertia), "power": 0.5 * B * (0.5 * omega * S) ** 2, "HS": hs}
+
+
 # ---------------------------------------------------------------------------- the run's flume
 
 
@@ -129,7 +189,10 @@ def flume(run) -> dict:
     return {"h": hi[1] - floor, "face": face, "far": float(cfg["domain"]["max"][0]),
             "S": 2.0 * abs(float(part["amplitude"])), "T": float(period), "g": g,
             "ramp_end": float(part.get("ramp_start", 0.0)) + float(part.get("ramp", 0.0)),
-            "ramp_start": float(part.get("ramp_start", 0.0)), "gauges": gauges, "wall": k}
+            "ramp_start": float(part.get("ramp_start", 0.0)), "gauges": gauges, "wall": k,
+            # X(t) = S/2 sin(omega t + phase0) along +x (sphcore's sine_translation, t absolute)
+            "phase0": math.radians(float(part.get("phase", 0.0))) + (math.pi if part["amplitude"] * axis[0] < 0
+                                                                     else 0.0)}
 
 
 def wave_heights(t, eta):
@@ -141,10 +204,10 @@ def wave_heights(t, eta):
 
 
 def first_harmonic(t, y, omega):
-    """(mean, amplitude) of the least-squares fit y ~ mean + a cos(omega t) + b sin(omega t)."""
+    """(mean, amplitude A, phase p) of the least-squares fit y ~ mean + A sin(omega t + p)."""
     basis = np.column_stack([np.ones_like(t), np.cos(omega * t), np.sin(omega * t)])
     coef = np.linalg.lstsq(basis, y, rcond=None)[0]
-    return float(coef[0]), float(math.hypot(coef[1], coef[2]))
+    return float(coef[0]), float(math.hypot(coef[1], coef[2])), float(math.atan2(coef[1], coef[2]))
 
 
 def measure(run, margin=0.0) -> dict:
@@ -176,8 +239,10 @@ def measure(run, margin=0.0) -> dict:
             "t": t, "rows": rows, "dir": run.dir}
 
 
-def paddle_force(run, m) -> dict | None:
-    """Mean and first-harmonic amplitude of the piston's Fx after the ramp, from wall_loads.csv."""
+def paddle_force(run, m, margin=0.0) -> dict | None:
+    """Mean and first harmonic of the piston's Fx from wall_loads.csv, in the gauges' window at
+    x = 0: from the ramp's end (plus margin periods) to the return of the far wall's reflection
+    (ramp_start + 2 L / cg) or the run's end; beside it Havelock's force (havelock)."""
     path = run.dir / WALL_LOADS_CSV
     if not path.is_file():
         return None
@@ -190,17 +255,30 @@ def paddle_force(run, m) -> dict | None:
     col = f"domain.walls[{m['wall']}].motion.Fx"
     if col not in header:
         return None
+    # a row is the mean force over the interval that ends at its t: it stands for the midpoint
     t, fx = data[:, 0], data[:, header.index(col)]
-    sel = (t >= m["ramp_end"]) & np.isfinite(fx)
+    t = t - 0.5 * np.diff(t, prepend=t[0])
+    t0 = m["ramp_end"] + margin * m["T"]
+    back = m["ramp_start"] + 2.0 * (m["far"] - m["face"]) / m["cg"]
+    t1 = min(back, float(t[-1]))
+    sel = (t >= t0) & (t <= t1) & np.isfinite(fx)
     if sel.sum() < 4:
         return None
-    # least squares fit of mean + a cos(omega t) + b sin(omega t): the first harmonic's amplitude
-    # (the reflective impulses make the raw series spiky; half its range overstates the swing)
+    # least squares fit of mean + A sin(omega t + p): the first harmonic (the mean, the still
+    # water's force, drops out; the reflective impulses make the raw series spiky, and half
+    # its range overstates the swing); the force on the water is -Fx
     ts, fs = t[sel], fx[sel]
-    mean, amplitude = first_harmonic(ts, fs, 2.0 * math.pi / m["T"])
-    return {"mean": mean, "amplitude": amplitude,
-            "half_range": float(0.5 * (fs.max() - fs.min())), "from": m["ramp_end"], "to": float(ts[-1]),
-            "hydrostatic": 0.5 * m["rho0"] * m["g"] * m["h"] ** 2}
+    omega = 2.0 * math.pi / m["T"]
+    mean, amplitude, p = first_harmonic(ts, -fs, omega)
+    phase = (p - m["phase0"] + math.pi) % (2.0 * math.pi) - math.pi
+    # the same fit over each whole period of the window: the spread of the amplitude (the noise)
+    whole = [(ts >= t0 + j * m["T"]) & (ts < t0 + (j + 1) * m["T"]) for j in range(int((t1 - t0) / m["T"]))]
+    periods = [first_harmonic(ts[q], -fs[q], omega)[1] for q in whole if q.sum() >= 4]
+    return {"mean": -mean, "amplitude": amplitude, "phase": phase, "periods": periods,
+            "half_range": float(0.5 * (fs.max() - fs.min())), "from": t0, "to": float(ts[-1]),
+            "reflection": back <= float(t[-1]),
+            "hydrostatic": 0.5 * m["rho0"] * m["g"] * m["h"] ** 2,
+            "theory": havelock(omega, m["h"], m["S"], m["g"], m["rho0"])}
 
 
 def decay(m):
@@ -240,9 +318,19 @@ def report(m, force):
               f"{(1.0 - math.exp(-rate * m['L'])) * 100.0:.1f}% per wavelength; H/S extrapolated to the piston "
               f"{at0:.4f} ({(at0 / m['biesel'] - 1.0) * 100.0:+.1f}% from Biesel)")
     if force is not None:
-        print(f"  piston force Fx over t = {force['from']:.2f} - {force['to']:.2f} s: mean {force['mean']:.1f} N/m "
-              f"(still water rho0 g h^2 / 2 = {force['hydrostatic']:.1f}), first-harmonic amplitude "
-              f"{force['amplitude']:.2f} N/m (half the range, spikes included: {force['half_range']:.1f})")
+        end = "the far wall's reflection returns" if force["reflection"] else "the run's end"
+        hv = force["theory"]
+        print(f"  piston force Fx over t = {force['from']:.2f} - {force['to']:.2f} s (a gauge's window at x = 0, "
+              f"to {end}): "
+              f"mean {force['mean']:.1f} N/m (still water rho0 g h^2 / 2 = {force['hydrostatic']:.1f}), "
+              f"half the range, spikes included: {force['half_range']:.1f} N/m")
+        print(f"  first harmonic of the force on the water (-Fx, mean removed), phase against the piston's "
+              f"displacement: measured {force['amplitude']:.2f} N/m at {math.degrees(force['phase']):.1f} deg, "
+              f"Havelock {hv['amplitude']:.2f} N/m at {math.degrees(hv['phase']):.1f} deg, "
+              f"difference {(force['amplitude'] / hv['amplitude'] - 1.0) * 100.0:+.1f}%; measured over each whole "
+              f"period: {', '.join(f'{a:.1f}' for a in force['periods']) or 'none'} N/m")
+        print(f"  Havelock: radiation damping {hv['damping']:.1f} N s/m^2 ({hv['radiation']:.2f} N/m with the "
+              f"velocity), added mass {hv['added_mass']:.3f} kg/m ({hv['inertia']:.2f} N/m with the acceleration)")
 
 
 def plot(m, all_runs, png):
@@ -289,7 +377,7 @@ def main(argv=None) -> int:
         runs = [open_run(p) for p in args.run]
         measured = [measure(r, args.margin) for r in runs]
         for r, m in zip(runs, measured):
-            report(m, paddle_force(r, m))
+            report(m, paddle_force(r, m, args.margin))
     except RunError as err:
         return refuse(PROG, err)
     if not args.no_plot:
