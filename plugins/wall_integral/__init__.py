@@ -33,6 +33,13 @@ have (see :mod:`.facewalls`); with ``faces = "table"`` they are computed once pe
 grid and interpolated (:mod:`.facetable`: next to fine meshes the exact integrals cost
 most of a step).
 
+Walls that move (``[[domain.motion]]``, ``[[domain.walls.motion]]``): the tank's planes are
+taken where they are, a moving group's faces in its own frame, continuity takes the
+velocity relative to the walls and the wall pressure the walls' acceleration
+(:mod:`.moving`); each moving group's load (the wall pressure's force and moment) goes to
+``ctx.add_wall_load`` for the ``wall_loads`` writer. Moving faces use the exact integrals
+(``faces = "table"`` tabulates the fixed faces only).
+
 Use it beside ``reflective``, which keeps every particle inside:
 ``[plugins] use = ["reflective", "wall_integral", ...]``. Options (``[wall_integral]``):
 ``faces`` ("exact" or "table"), ``table_spacing`` (in h), ``table_max_nodes``.
@@ -86,6 +93,24 @@ class WallIntegralPlugin:
         self.offsets = np.ascontiguousarray(case.planes.offsets, dtype=np.float64)
         self._faces = None  # (verts, grid arrays, stamps), built on first use (the grid needs h)
         self._epoch = 0
+        # walls that move (sphcore.geometry.motion.MovingGroup): the tank's planes follow
+        # ctx.planes; each group's faces get their own grid in the group's frame (.moving)
+        groups = tuple(getattr(case, "moving", ()))
+        self.tank = next((g for g in groups if g.planes), None)
+        self.face_groups = tuple(g for g in groups if len(g.faces))
+        self._fixed = None
+        if self.walls is not None and self.face_groups:
+            moving = np.zeros(self.walls.count, bool)
+            for g in self.face_groups:
+                moving[np.asarray(g.faces, np.int64)] = True
+            self._fixed = np.flatnonzero(~moving)
+        self._moving_faces = None  # per face group: (verts, grid arrays, stamps), built on first use
+
+    @hookimpl
+    def sph_moving_walls(self):
+        # the planes where the tank is, the faces in their group's frame, the walls' velocity
+        # in continuity and their acceleration in the wall pressure (moving.py)
+        return True
 
     @hookimpl
     def sph_wall_completion(self, dim):
@@ -106,15 +131,94 @@ class WallIntegralPlugin:
             self._near = np.empty(n + n // 4, np.int64)
         if self._table is None:
             self._table = lattice_error_tables(prm.kernel_id, prm.h, prm.dx, dim, prm.moment_norm)
+        normals, offsets = self.normals, self.offsets
+        if self.tank is not None:  # the tank's planes where they are now
+            planes = ctx.planes
+            normals = np.ascontiguousarray(planes.normals, dtype=np.float64)
+            offsets = np.ascontiguousarray(planes.offsets, dtype=np.float64)
         # the terms of the planes, for the particles within 2h of one (the core zeroed the arrays)
-        count = near_planes(st.pos, self.normals, self.offsets, prm.support, self._near)
+        count = near_planes(st.pos, normals, offsets, prm.support, self._near)
         if count:  # no particle near a plane (a tank of faces alone): no launch
-            on_threads_by_size(count, PARALLEL_NEAR, add_plane_terms, self._near, count, st.pos, self.normals,
-                               self.offsets, prm.kernel_id, prm.h, prm.gravity, *self._table, prm.support,
+            on_threads_by_size(count, PARALLEL_NEAR, add_plane_terms, self._near, count, st.pos, normals,
+                               offsets, prm.kernel_id, prm.h, prm.gravity, *self._table, prm.support,
                                prm.moment_norm, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
+        loads = {}
+        if self.tank is not None and count:
+            loads[self.tank.name] = self._tank_terms(ctx, terms, count, normals, offsets)
         if self.walls is not None:
-            self._add_face_terms(ctx, terms)
+            if self._fixed is None or len(self._fixed):
+                self._add_face_terms(ctx, terms)
+            for k, g in enumerate(self.face_groups):
+                force, moment = self._moving_face_terms(ctx, terms, k, g)
+                if g.name in loads:  # the tank's walls: its planes and faces together
+                    force, moment = force + loads[g.name][0], moment + loads[g.name][1]
+                loads[g.name] = (force, moment)
+        if self.tank is not None or self.face_groups:  # kept for the next step's load (restart too)
+            ctx.kept(self)["loads"] = {name: [float(v) for v in f] + [float(v) for v in m]
+                                       for name, (f, m) in loads.items()}
         ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(terms.share))
+
+    @hookimpl
+    def sph_after_integrate(self, ctx, pos0, pos, vel, acc, dt):
+        """The step's load on each moving group: the wall pressure force and moment of the
+        evaluation the step started from, times dt (:mod:`.moving`)."""
+        if self.tank is None and not self.face_groups:
+            return
+        dim = ctx.params.dim
+        for name, row in ctx.kept(self).get("loads", {}).items():
+            force, moment = np.asarray(row[:dim]), np.asarray(row[dim:])
+            ctx.add_wall_load(name, force * dt, moment * dt)
+
+    def _load_coefs(self, ctx):
+        """(2 m p / rho, m lambda (rho - rho_ref) / rho) per particle: the coefficients of G and
+        of the first moment in the wall's load (:mod:`.moving`)."""
+        st, prm = ctx.state, ctx.params
+        return (2.0 * st.m * ctx.force_pressure / st.rho,
+                st.m * prm.moment_norm * (st.rho - prm.rho_ref) / st.rho)
+
+    @staticmethod
+    def _gravity3(prm):
+        g = np.zeros(3)
+        g[:prm.dim] = np.asarray(prm.gravity, np.float64)[:prm.dim]
+        return g
+
+    def _tank_terms(self, ctx, terms, count, normals, offsets):
+        from .moving import empty_load, load_of, pose_arrays, tank_terms
+
+        st, prm = ctx.state, ctx.params
+        rot, centre, origin, vel, acc, omega, alpha = pose_arrays(self.tank.motion.pose(ctx.t), prm.dim)
+        load = empty_load()
+        tank_terms(self._near, count, st.pos, normals, offsets, prm.kernel_id, prm.h, origin, vel, acc, omega,
+                   alpha, self._gravity3(prm), *self._load_coefs(ctx), terms.share, terms.grad, terms.hydro,
+                   terms.flux, terms.accel, load)
+        return load_of(load, prm.dim)
+
+    def _moving_face_terms(self, ctx, terms, k, group):
+        """A moving group's faces in its own frame (:func:`.moving.moving_face_terms`)."""
+        from sphcore.api import build_grid
+
+        from .facewalls import stamps_for
+        from .moving import empty_load, load_of, pose_arrays, moving_face_terms
+
+        st, prm = ctx.state, ctx.params
+        if self._moving_faces is None:
+            self._moving_faces = [None] * len(self.face_groups)
+        if self._moving_faces[k] is None:
+            verts = np.ascontiguousarray(self.walls.verts[np.asarray(group.faces, np.int64)], dtype=np.float64)
+            self._moving_faces[k] = (verts, build_grid(verts, prm.support).arrays(), stamps_for(verts.shape[0]))
+        verts, grid, stamps = self._moving_faces[k]
+        pose = group.motion.pose(ctx.t)
+        rot, centre, origin, vel, acc, omega, alpha = pose_arrays(pose, prm.dim)
+        world = self._gravity3(prm)
+        gravity = np.zeros(3)
+        gravity[:prm.dim] = rot.T @ world[:prm.dim]  # g in the group's frame
+        full = float(self._table[1][self._table[1].shape[0] - 1, 2])
+        load = empty_load()
+        self._epoch += 2  # two marks a particle (moving_face_terms)
+        moving_face_terms(st.pos, rot, centre, origin, vel, acc, omega, alpha, verts, *grid, stamps, self._epoch,
+                          prm.kernel_id, prm.h, gravity, world, full, *self._load_coefs(ctx), terms.share, terms.grad,
+                          terms.hydro, terms.fill, terms.normals, terms.flux, terms.accel, load)
+        return load_of(load, prm.dim)
 
     def _add_face_terms(self, ctx, terms):
         """The finite faces' terms: from the table (built on the first call) or exact."""
@@ -126,14 +230,15 @@ class WallIntegralPlugin:
         st, prm = ctx.state, ctx.params
         full = float(self._table[1][self._table[1].shape[0] - 1, 2])  # interior lattice sum
         if self._faces is None:  # cells of 2h: a particle's support box spans <= 3 per axis
-            verts = np.ascontiguousarray(self.walls.verts, dtype=np.float64)
+            verts = self.walls.verts if self._fixed is None else self.walls.verts[self._fixed]
+            verts = np.ascontiguousarray(verts, dtype=np.float64)
             grid = build_grid(verts, prm.support).arrays()
             table = None
             if self.cfg["faces"] == "table":
                 spacing = self.cfg["table_spacing"] * prm.h
                 table = build_table(verts, grid, prm.kernel_id, prm.h, prm.gravity, spacing,
                                     self.cfg["table_max_nodes"])
-            self._faces = (verts, grid, stamps_for(self.walls.count), table)
+            self._faces = (verts, grid, stamps_for(verts.shape[0]), table)
         verts, grid, stamps, table = self._faces
         stats = ctx.stats(self)  # in the summary: which terms the faces got, and the table's size
         stats["face_terms"] = "table" if table is not None else "exact"

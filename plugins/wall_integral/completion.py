@@ -37,6 +37,15 @@ def complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a
     particle or of a thin film is (nearly) nothing. Without it a lone particle near a wall
     would be pushed and decompressed as if the fluid surrounded it (measured: a splash
     particle of the Lobovsky impact fell below 0.5 rho0). phi = 1 on the initial lattice.
+
+    Walls that move (``wall.flux`` not empty): continuity takes the velocity relative to
+    the walls, 2 rho_i (v_i - v_w) . G_w = 2 rho_i (v_i . G_w - phi sum_k v_wk . G_k), and
+    the hydrostatic extrapolation the walls' acceleration: in a wall's frame the mirror
+    fluid's pressure grows along g - a_w (Adami et al. 2012, Eq. 27, for the same
+    extrapolation with dummy particles), so the first moment gains lambda A_w (-a_w) =
+    lambda (T (-a_w) + s (-a_w)) (``wall.accel``), scaled by phi along the walls' normals
+    as the discrete complement of gravity is. The walls have no viscous term (free slip),
+    so their velocity enters nothing else.
     """
     ref = wall.fill[i]
     phi = min(1.0, gam / ref) if ref > 0.0 else 1.0
@@ -60,6 +69,15 @@ def complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a
     h0 = phi * en0 + t0 - tn0
     h1 = phi * en1 + t1 - tn1
     h2 = phi * en2 + t2 - tn2
+    moving = wall.flux.shape[0] > 0
+    if moving:  # the walls' acceleration: in their frame the mirror's pressure follows g - a_w
+        m0 = lam * wall.accel[i, 0]
+        m1 = lam * wall.accel[i, 1]
+        m2 = lam * wall.accel[i, 2] if dim == 3 else 0.0
+        mn0, mn1, mn2 = _project(q, i, dim, m0, m1, m2)
+        h0 += phi * mn0 + m0 - mn0
+        h1 += phi * mn1 + m1 - mn1
+        h2 += phi * mn2 + m2 - mn2
     cp = 2.0 * p_i / rho_i
     ch = (rho_i - rho_ref) / rho_i
     a0 -= cp * w0 + ch * h0
@@ -68,6 +86,8 @@ def complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a
     vw = vel[i, 0] * w0 + vel[i, 1] * w1
     if dim == 3:
         vw += vel[i, 2] * w2
+    if moving:  # the velocity relative to the walls: (v_i - v_w) . G_w, group by group
+        vw -= phi * wall.flux[i]
     dr += 2.0 * rho_i * vw
     return a0, a1, a2, dr
 

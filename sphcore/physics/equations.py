@@ -82,6 +82,14 @@ class WallTerms(NamedTuple):
     false when no plugin supplies them (skipped). Plugins fill them in the
     ``sph_wall_terms`` hook; share, grad, hydro and fill of several plugins add up,
     ``normals`` is replaced by the projector onto the span of both.
+
+    Walls that move (a run with ``case.moving``) add two terms, empty arrays otherwise:
+    ``flux`` (n,): sum over the wall groups of v_w . G_w (m/s / m), each group's wall
+    velocity at the particle against its part of G, which the continuity completion takes
+    from v_i . G_w (the fluid's velocity relative to the wall); ``accel`` (n, dim): the
+    outside first moment of minus the walls' acceleration, sum over the groups of
+    T (-a_w) + s (-a_w) (m/s^2), which joins the hydrostatic extrapolation of the wall
+    pressure (in the wall's frame the fluid feels g - a_w).
     """
 
     share: np.ndarray
@@ -90,6 +98,8 @@ class WallTerms(NamedTuple):
     normals: np.ndarray
     fill: np.ndarray
     active: bool
+    flux: np.ndarray = np.zeros(0)
+    accel: np.ndarray = np.zeros((0, 3))
 
 
 # constants of each compiled twin of the pair loop (see the end): the spatial dimension,

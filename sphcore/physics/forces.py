@@ -183,14 +183,17 @@ class Forces:
             return self._wall
         n, dim = self.ctx.state.n, self.ctx.params.dim
         if self._wall.share.shape[0] != n:
+            moving = n if getattr(self.ctx.case, "moving", ()) else 0  # moving walls' terms, else empty
             self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)),
-                                   np.zeros(n), True)
+                                   np.zeros(n), True, np.zeros(moving), np.zeros((moving, dim)))
         w = self._wall
         w.share[:] = 0.0
         w.grad[:] = 0.0
         w.hydro[:] = 0.0
         w.normals[:] = 0.0
         w.fill[:] = 0.0
+        w.flux[:] = 0.0
+        w.accel[:] = 0.0
         self.hook.sph_wall_terms(ctx=self.ctx, terms=w)
         self.ctx.counters["wall_terms"] += 1
         return w

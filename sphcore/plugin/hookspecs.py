@@ -107,7 +107,9 @@ def sph_wall_terms(ctx, terms):
     your walls contribute to share, grad, hydro and fill, and widen the projector to your
     walls' normals, so that several wall plugins combine. The core then completes the
     continuity and momentum sums with them through the function that a plugin returns from
-    ``sph_wall_completion``.
+    ``sph_wall_completion``. In a run with moving walls ``terms.flux`` (n,) and
+    ``terms.accel`` (n, dim) are allocated too (empty otherwise): add v_w . G of your walls'
+    velocity and their gradient, and the outside first moment of minus their acceleration.
     """
 
 

@@ -1,0 +1,244 @@
+"""Boundary-integral walls that move: the terms of a moving wall group, where it is now.
+
+A moving group (:class:`sphcore.geometry.motion.MovingGroup`: the tank's planes, or finite
+faces) is a rigid body with the pose x = c + D + R (X - c) (:class:`sphcore.geometry.motion.Pose`).
+Its wall integrals are those of fixed walls evaluated where the walls are:
+
+- the tank's planes are moved as a whole (``ctx.planes`` at the run's time); share,
+  gradient, moment, lattice correction and projector are those of the fixed planes at that
+  place (``planes.py``), the lattice tables included (a rigid motion keeps the walls'
+  distances and angles);
+- finite faces keep their reference vertices and face grid: each particle is taken into
+  the group's frame, X = c + R^T (x - c - D), the terms are computed there with gravity
+  in that frame, R^T g, and s, G, T g and the projector's directions are turned back
+  with R (:func:`moving_face_terms`). A grid built once stays valid.
+
+Both add the two terms of a moving wall (:class:`sphcore.physics.equations.WallTerms`):
+``flux`` += v_w . G_k, with v_w = D' + Omega x (x - c - D) the wall's velocity at the
+particle (the rigid motion's field at the particle rather than at the wall's nearest
+point: they differ by |Omega| d < 2h |Omega|), and ``accel`` += T (-a_w) + s (-a_w), the
+outside first moment of minus the wall's acceleration a_w = D'' + alpha x r + Omega x
+(Omega x r) at the particle (the moment integral evaluated with -a_w in place of g).
+
+The load the fluid puts on the group is the reaction of the completion's terms of its
+walls, F = sum_i m_i (2 (p_i / rho_i) G_k,i + ((rho_i - rho_ref)/rho_i) lambda A_k,i (g - a_w))
+over the particles near it, with the exact first moment A_k (g - a_w) = T_k (g - a_w) +
+s_k (g - a_w) of the group's walls, and its moment about the group's centre of rotation
+where it is now, sum_i (x_i - c - D) x f_i (:func:`moving_face_terms` and
+:func:`tank_terms` return both). The completion's neighbourhood scaling phi (<= 1, below 1
+only for particles with a thin neighbourhood) and the discrete complement it takes for the
+moment along the walls' normals are not separable by group: the load uses phi = 1 and the
+exact moment, what they are on a full neighbourhood.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from .facewalls import add_terms, point_terms
+from .normals import set_projector
+from .share import wall_point
+
+LOAD_ROWS = 64  # blocks of particles, one partial load sum each (threads write their own)
+
+
+@njit(cache=True, inline="always")
+def _rigid(x0, x1, x2, dim, origin, vel, acc, omega, alpha):
+    """(v_w, a_w) as 6 scalars at the point x: the rigid motion's velocity and acceleration
+    there, r = x - origin (origin = c + D)."""
+    r0 = x0 - origin[0]
+    r1 = x1 - origin[1]
+    r2 = x2 - origin[2] if dim == 3 else 0.0
+    w0, w1, w2 = omega[0], omega[1], omega[2]
+    c0 = w1 * r2 - w2 * r1  # Omega x r
+    c1 = w2 * r0 - w0 * r2
+    c2 = w0 * r1 - w1 * r0
+    e0 = w1 * c2 - w2 * c1  # Omega x (Omega x r)
+    e1 = w2 * c0 - w0 * c2
+    e2 = w0 * c1 - w1 * c0
+    b0, b1, b2 = alpha[0], alpha[1], alpha[2]
+    f0 = b1 * r2 - b2 * r1  # alpha x r
+    f1 = b2 * r0 - b0 * r2
+    f2 = b0 * r1 - b1 * r0
+    v2 = vel[2] + c2 if dim == 3 else 0.0
+    a2 = acc[2] + f2 + e2 if dim == 3 else 0.0
+    return vel[0] + c0, vel[1] + c1, v2, acc[0] + f0 + e0, acc[1] + f1 + e1, a2
+
+
+@njit(cache=True, inline="always")
+def _add_load(load, b, dim, x0, x1, x2, origin, cp, ch, G0, G1, G2, A0, A1, A2):
+    """Block b's load row += the force f = cp G + ch A at x and its moment about origin."""
+    f0 = cp * G0 + ch * A0
+    f1 = cp * G1 + ch * A1
+    f2 = cp * G2 + ch * A2
+    load[b, 0] += f0
+    load[b, 1] += f1
+    load[b, 2] += f2
+    r0 = x0 - origin[0]
+    r1 = x1 - origin[1]
+    r2 = x2 - origin[2] if dim == 3 else 0.0
+    load[b, 3] += r1 * f2 - r2 * f1
+    load[b, 4] += r2 * f0 - r0 * f2
+    load[b, 5] += r0 * f1 - r1 * f0
+
+
+@njit(cache=True, parallel=True)
+def tank_terms(idx, count, pos, normals, offsets, kernel_id, h, origin, vel, acc, omega, alpha, gravity, coef_p,
+               coef_h, share, grad, hydro, flux, accel, load):
+    """The moving tank's terms for the particles idx[:count] near its planes (``normals``,
+    ``offsets`` where the planes are now), after the planes' own terms are in ``grad``
+    (every plane belongs to the tank, so share, grad and hydro hold the tank's s, G_w and
+    T g there): flux += v_w . G_w, accel += T (-a_w) + s (-a_w); load (LOAD_ROWS, 6) +=
+    force and moment about ``origin`` of coef_p G_w + coef_h (T g + s g + accel) (coef_p =
+    2 m p / rho, coef_h = m lambda (rho - rho_ref) / rho). vel, acc, omega, alpha, gravity:
+    3-vectors (module docstring)."""
+    dim = pos.shape[1]
+    rows = load.shape[0]
+    for b in prange(rows):
+        for t in range(b * count // rows, (b + 1) * count // rows):
+            i = idx[t]
+            x0, x1 = pos[i, 0], pos[i, 1]
+            x2 = pos[i, 2] if dim == 3 else 0.0
+            v0, v1, v2, a0, a1, a2 = _rigid(x0, x1, x2, dim, origin, vel, acc, omega, alpha)
+            g0, g1 = grad[i, 0], grad[i, 1]
+            g2 = grad[i, 2] if dim == 3 else 0.0
+            flux[i] += v0 * g0 + v1 * g1 + v2 * g2
+            s, _, _, _, t0, t1, t2 = wall_point(x0, x1, x2, normals, offsets, kernel_id, h, -a0, -a1, -a2)
+            m0 = t0 - s * a0
+            m1 = t1 - s * a1
+            m2 = t2 - s * a2 if dim == 3 else 0.0
+            accel[i, 0] += m0
+            accel[i, 1] += m1
+            if dim == 3:
+                accel[i, 2] += m2
+            s_i = share[i]
+            h2 = hydro[i, 2] if dim == 3 else 0.0
+            _add_load(load, b, dim, x0, x1, x2, origin, coef_p[i], coef_h[i], g0, g1, g2,
+                      hydro[i, 0] + s_i * gravity[0] + m0, hydro[i, 1] + s_i * gravity[1] + m1,
+                      h2 + s_i * gravity[2] + m2)
+
+
+@njit(cache=True, parallel=True)
+def moving_face_terms(pos, rot, centre, origin, vel, acc, omega, alpha, verts, glo, ginv, gshape, gstart, gitems,
+                      stamps, epoch, kernel_id, h, gravity, world_gravity, full, coef_p, coef_h, share, grad, hydro,
+                      fill, q, flux, accel, load):
+    """Add a moving group's faces (reference ``verts`` and their grid) to the terms of every
+    particle within 2h of them: s, R G, R T g (T computed with R^T g, ``gravity`` given in
+    the group's frame), fill, the projector (its directions turned back with R), flux and
+    accel (module docstring); load (stamps.shape[0], 6) += each block's force and moment
+    (:func:`tank_terms`; ``world_gravity`` g as a 3-vector).
+    ``rot`` R (dim, dim), ``centre`` c (dim,), ``origin`` c + D (3,). ``stamps`` marks as in
+    :func:`.facewalls.face_wall_terms`, two marks per particle: ``epoch`` and epoch + 1 must
+    differ from every earlier call's."""
+    n, dim = pos.shape
+    rows = stamps.shape[0]
+    first = epoch * (n + 1)
+    second = (epoch + 1) * (n + 1)
+    for b in prange(rows):
+        qb = np.zeros((dim, dim))
+        gb = np.zeros(3)
+        X = np.zeros(3)
+        for i in range(b * n // rows, (b + 1) * n // rows):
+            x0, x1 = pos[i, 0], pos[i, 1]
+            x2 = pos[i, 2] if dim == 3 else 0.0
+            # X = c + R^T (x - c - D), the particle in the group's frame
+            _to_body(X, x0, x1, x2, dim, rot, centre, origin)
+            for a in range(dim):  # the projector already there, in the group's frame: R^T q R
+                for e in range(dim):
+                    acc_ = 0.0
+                    for u in range(dim):
+                        for w in range(dim):
+                            acc_ += rot[u, a] * q[i, u, w] * rot[w, e]
+                    qb[a, e] = acc_
+            near, s, gr0, gr1, gr2, t0, t1, t2, basis, count = point_terms(
+                X[0], X[1], X[2], dim, verts, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), first + i,
+                kernel_id, h, gravity, qb)
+            if near == 0:
+                continue
+            G0, G1, G2 = _turn(rot, dim, gr0, gr1, gr2)
+            T0, T1, T2 = _turn(rot, dim, t0, t1, t2)
+            add_terms(i, dim, s, G0, G1, G2, T0, T1, T2, full, share, grad, hydro, fill)
+            set_projector(q[i], dim, _turn_basis(rot, dim, basis, count), count)
+            v0, v1, v2, a0, a1, a2 = _rigid(x0, x1, x2, dim, origin, vel, acc, omega, alpha)
+            flux[i] += v0 * G0 + v1 * G1 + v2 * G2
+            # T (-a_w): the same faces' moment with -a_w (in the group's frame) for gravity
+            gb[0], gb[1], gb[2] = _turn_back(rot, dim, -a0, -a1, -a2)
+            _, sa, _, _, _, m0, m1, m2, _, _ = point_terms(
+                X[0], X[1], X[2], dim, verts, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), second + i,
+                kernel_id, h, gb, qb)
+            M0, M1, M2 = _turn(rot, dim, m0, m1, m2)
+            M0 -= sa * a0
+            M1 -= sa * a1
+            M2 = M2 - sa * a2 if dim == 3 else 0.0
+            accel[i, 0] += M0
+            accel[i, 1] += M1
+            if dim == 3:
+                accel[i, 2] += M2
+            _add_load(load, b, dim, x0, x1, x2, origin, coef_p[i], coef_h[i], G0, G1, G2,
+                      T0 + s * world_gravity[0] + M0, T1 + s * world_gravity[1] + M1,
+                      T2 + s * world_gravity[2] + M2)
+
+
+@njit(cache=True, inline="always")
+def _to_body(X, x0, x1, x2, dim, rot, centre, origin):
+    """X (3,) <- c + R^T (x - origin) (third entry 0 in 2D)."""
+    d0 = x0 - origin[0]
+    d1 = x1 - origin[1]
+    d2 = x2 - origin[2] if dim == 3 else 0.0
+    for a in range(dim):
+        X[a] = centre[a] + rot[0, a] * d0 + rot[1, a] * d1 + (rot[2, a] * d2 if dim == 3 else 0.0)
+
+
+@njit(cache=True, inline="always")
+def _turn(rot, dim, v0, v1, v2):
+    """R v for a vector of the group's frame."""
+    if dim == 2:
+        return rot[0, 0] * v0 + rot[0, 1] * v1, rot[1, 0] * v0 + rot[1, 1] * v1, 0.0
+    return (rot[0, 0] * v0 + rot[0, 1] * v1 + rot[0, 2] * v2,
+            rot[1, 0] * v0 + rot[1, 1] * v1 + rot[1, 2] * v2,
+            rot[2, 0] * v0 + rot[2, 1] * v1 + rot[2, 2] * v2)
+
+
+@njit(cache=True, inline="always")
+def _turn_back(rot, dim, v0, v1, v2):
+    """R^T v: a world vector in the group's frame."""
+    if dim == 2:
+        return rot[0, 0] * v0 + rot[1, 0] * v1, rot[0, 1] * v0 + rot[1, 1] * v1, 0.0
+    return (rot[0, 0] * v0 + rot[1, 0] * v1 + rot[2, 0] * v2,
+            rot[0, 1] * v0 + rot[1, 1] * v1 + rot[2, 1] * v2,
+            rot[0, 2] * v0 + rot[1, 2] * v1 + rot[2, 2] * v2)
+
+
+@njit(cache=True, inline="always")
+def _turn_basis(rot, dim, basis, count):
+    """The basis rows (a 9-tuple) turned with R."""
+    a0, a1, a2 = _turn(rot, dim, basis[0], basis[1], basis[2])
+    b0, b1, b2 = _turn(rot, dim, basis[3], basis[4], basis[5])
+    c0, c1, c2 = _turn(rot, dim, basis[6], basis[7], basis[8])
+    return (a0, a1, a2, b0, b1, b2, c0, c1, c2)
+
+
+def pose_arrays(pose, dim):
+    """The pose as the kernels take it: (rot (dim, dim), centre (dim,), origin (3,), vel (3,),
+    acc (3,), omega (3,), alpha (3,))."""
+    def three(v):
+        out = np.zeros(3)
+        out[:dim] = v
+        return out
+
+    return (np.ascontiguousarray(pose.rotation, dtype=np.float64), np.ascontiguousarray(pose.centre, dtype=np.float64),
+            three(pose.centre + pose.shift), three(pose.velocity), three(pose.acceleration),
+            np.asarray(pose.omega, np.float64), np.asarray(pose.alpha, np.float64))
+
+
+def load_of(load, dim):
+    """(force (dim,), moment (3,) or (1,) in 2D) from the blocks' partial sums."""
+    total = load.sum(axis=0)
+    moment = total[3:] if dim == 3 else total[5:6]
+    return total[:dim], moment
+
+
+def empty_load():
+    return np.zeros((LOAD_ROWS, 6))
+
