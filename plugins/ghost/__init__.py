@@ -30,7 +30,9 @@ the wall, the hydrostatic correction with g - a_w after Adami, Hu & Adams 2012, 
 A case with finite wall faces is refused, moving or not (the plugin mirrors across planes
 only). A force evaluation sees the planes at ``ctx.t``, the time the particles are at
 (the core advances its clock before the leapfrog's end-of-step rates). A case whose walls
-do not move takes the fixed-wall path unchanged.
+do not move takes the fixed-wall path unchanged. The moving tank's load (force and moment
+of the fluid on it, for the ``wall_loads`` writer) is the images' force on the fluid,
+reversed (``sph_after_integrate``).
 
 Run summary: ``ghosts_last`` (ghosts of the last force evaluation), ``ghosts_max``,
 ``ghost_reallocations`` (buffer growths).
@@ -120,6 +122,35 @@ class GhostPlugin:
         stats["ghosts_max"] = max(stats.get("ghosts_max", 0), src.n)
         stats["ghosts_last"] = src.n
         return src
+
+    @hookimpl
+    def sph_after_integrate(self, ctx, pos0, pos, vel, acc, dt):
+        """The moving tank's load over the step: what the images pushed the fluid with.
+
+        Every wall is the tank's and the fluid's pair forces cancel in sum and in moment
+        (pressure and artificial viscosity act along x_ij, equal and opposite), so the
+        images' force on the fluid is sum_i m_i (a_i - g_i), g_i the gravity term the core
+        added (g, or g (1 - rho0/rho_i) with modified pressure), and the fluid's load on
+        the tank is its opposite, with its moment about the tank's centre of rotation where
+        it is; both times dt go to ``ctx.add_wall_load``. With the kernel gradient correction
+        the pair forces are not antisymmetric and the load carries that scheme's momentum
+        error too."""
+        if self.tank is None or acc is None:
+            return
+        import numpy as np
+
+        st, prm = ctx.state, ctx.params
+        dim = prm.dim
+        g = np.asarray(prm.gravity, np.float64)[:dim]
+        scale = 1.0 - prm.rho_ref / st.rho if prm.rho_ref else np.ones(st.n)
+        f = -(st.m[:, None] * (acc - scale[:, None] * g))  # on the tank, per particle
+        pose = self.tank.motion.pose(ctx.t)  # the step's start, where acc was evaluated
+        r = pos0 - (pose.centre + pose.shift)
+        if dim == 2:
+            moment = np.array([(r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0]).sum()])
+        else:
+            moment = np.cross(r, f).sum(axis=0)
+        ctx.add_wall_load(self.tank.name, f.sum(axis=0) * dt, moment * dt)
 
     @hookimpl
     def sph_summary(self, ctx):
