@@ -29,7 +29,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 import sphcore
-from sphcore.api import FLUID, GHOST, SPHERE, OutputError, ScheduledWriter, hookimpl, mark_written
+from sphcore.api import (FLUID, GHOST, SPHERE, CaseError, OutputError, ScheduledWriter, hookimpl, leading_complete,
+                         mark_written)
 
 if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
     import netCDF4
@@ -258,6 +259,9 @@ class NetcdfWriter(ScheduledWriter):
 
     # ---------------------------------------------------------------- restart
 
+    def frames_on_disk(self, ctx):
+        return series_on_disk(Path(ctx.output_dir) / FILE_NAME, set(FRAME_VARS) | set(STATIC_VARS))
+
     def reopen_for_restart(self, ctx) -> None:
         """Reopen ``particles.nc`` of an earlier run and go on appending; frames up to ``ctx.step`` stay.
 
@@ -279,9 +283,8 @@ class NetcdfWriter(ScheduledWriter):
                 src.set_auto_maskandscale(False)
                 steps, times = src["step"][:], src["time"][:]
             # frames to keep: the leading ones up to the restart step (a NaN time marks
-            # a frame left incomplete by a failed write)
-            ok = np.isfinite(times) & (steps <= ctx.step)
-            keep = len(ok) if ok.all() else int(np.argmin(ok))
+            # a frame left incomplete by a failed write, a time out of order a cut file)
+            keep = leading_complete(times, steps, ctx.step)
             if keep < len(steps):
                 rewrite_first(path, keep)
             ds = netCDF4.Dataset(path, "a")
@@ -293,6 +296,31 @@ class NetcdfWriter(ScheduledWriter):
         if keep:
             t_last = float(times[keep - 1])
             self.schedule.resume(t_last, int(steps[keep - 1]) if steps[keep - 1] == ctx.step else None)
+
+
+def series_on_disk(path: Path, names):
+    """(path, frames) of a netCDF series for a restart's check (``ScheduledWriter.frames_on_disk``):
+    ``(time, step)`` of every record, None when the file is missing, [] when its header was
+    cut; None for a link (the output directory refuses it). A file that is not a regular,
+    readable netCDF file is a CaseError naming it."""
+    import netCDF4
+    if path.is_symlink():
+        return None
+    if not path.exists():
+        return path, None
+    redo = "restore it, or run again with --overwrite (or --output DIR)"
+    if not path.is_file():
+        raise CaseError(path, "--restart", f"not a regular file; {redo}")
+    try:
+        if header_cut(path, names):
+            return path, []
+        with netCDF4.Dataset(path) as src:
+            src.set_auto_maskandscale(False)
+            times, steps = np.asarray(src["time"][:], float), np.asarray(src["step"][:])
+    except (OSError, RuntimeError, KeyError, IndexError, ValueError) as err:
+        reason = getattr(err, "strerror", None) or str(err) or type(err).__name__
+        raise CaseError(path, "--restart", f"not a readable netCDF file ({reason}); {redo}") from None
+    return path, list(zip(times.tolist(), steps.tolist()))
 
 
 def header_cut(path: Path, names) -> bool:

@@ -24,7 +24,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sphcore.api import Faces, Option, OutputError, ScheduledWriter, hookimpl, outline, write_atomically
+from sphcore.api import (CaseError, Faces, Option, OutputError, ScheduledWriter, hookimpl, outline, planes_at,
+                         write_atomically)
 
 if TYPE_CHECKING:  # meshio is imported where a file is written: a run without VTU output
     import meshio  # (or a case that only names the table) does not pay its import time
@@ -138,24 +139,28 @@ def wall_frame(rel: str, name: str) -> str:
 
 def walls_at(case, t: float):
     """The faces (nf, dim, dim) of every wall at time t: fixed faces as case.toml draws them,
-    moving groups' faces at their pose, and the outline of the planes (moved with the tank
-    if it moves), or None without any."""
+    moving groups' faces at their pose, and the outline of the planes where they are (the
+    tank's carried with it, a piston's moved on its own), or None without any."""
     faces = getattr(case, "faces", None)
     nf = faces.count if faces is not None else 0
     parts = []
     verts = faces.verts.copy() if nf else None
-    tank = None
-    for g in getattr(case, "moving", ()):
-        pose = g.motion.pose(t)
+    moving = getattr(case, "moving", ())
+    for g in moving:
         if len(g.faces):
-            verts[g.faces] = pose.to_world(faces.verts[g.faces])
-        if g.planes:
-            tank = pose
+            verts[g.faces] = g.motion.pose(t).to_world(faces.verts[g.faces])
     if nf:
         parts.append(verts)
-    box = outline(case.planes) if case.planes.count else None
+    box = None
+    if case.planes.count:
+        tank = [g for g in moving if len(g.planes)]
+        if len(tank) == 1 and len(tank[0].planes) == case.planes.count:  # the tank's outline, carried
+            box = outline(case.planes)
+            box = tank[0].motion.pose(t).to_world(box) if box is not None else None
+        else:  # fixed planes, or a piston among them: the outline of the planes where they are
+            box = outline(planes_at(case.planes, moving, t))
     if box is not None:
-        parts.append(tank.to_world(box) if tank is not None else box)
+        parts.append(box)
     return np.ascontiguousarray(np.concatenate(parts)) if parts else None
 
 
@@ -168,6 +173,19 @@ def pvd_text(frames: list[tuple[float, str]]) -> str:
         ET.SubElement(coll, "DataSet", timestep=repr(float(t)), group="", part="0", file=rel)
     ET.indent(root)
     return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def whole_frame(path: Path) -> bool:
+    """Whether ``path`` is a regular file that ends as :func:`vtu_text` ends a frame."""
+    tail = b"</VTKFile>\n"
+    try:
+        if path.is_symlink() or not path.is_file() or path.stat().st_size < len(tail):
+            return False
+        with open(path, "rb") as f:
+            f.seek(-len(tail), 2)
+            return f.read() == tail
+    except OSError:
+        return False
 
 
 def read_pvd(path: Path) -> list[tuple[float, str]]:
@@ -256,6 +274,30 @@ class VtuWriter(ScheduledWriter):
         frames = [(t, wall_frame(r, name)) for t, r in self.frames] + [(float(ctx.t), wrel)]
         collection = pvd_text(frames)
         replace_atomically(out / f"{name}_walls.pvd", lambda tmp: tmp.write_text(collection))
+
+    def frames_on_disk(self, ctx):
+        """The collection's frames (time, None) for a restart's check; a frame up to the
+        restart whose file is missing, not a regular file or cut (not ending as a frame
+        ends) is a CaseError naming that file."""
+        pvd = self.pvd_path(ctx)
+        if pvd.is_symlink():
+            return None  # the output directory refuses it
+        if not pvd.exists():
+            return pvd, None
+        redo = "restore it, or run again with --overwrite (or --output DIR)"
+        try:
+            if not pvd.is_file():
+                raise OSError("not a regular file")
+            frames = read_pvd(pvd)
+            if not all(isinstance(rel, str) and rel for _, rel in frames):
+                raise ValueError("a DataSet without a file")
+        except (OSError, ET.ParseError, ValueError, TypeError) as err:
+            raise CaseError(pvd, "--restart", f"not a readable collection ({err}); {redo}") from None
+        for t, rel in frames:
+            if t <= ctx.t and not whole_frame(Path(ctx.output_dir) / rel):
+                raise CaseError(Path(ctx.output_dir) / rel, "--restart", f"the frame at t = {t!r} s that {pvd.name} "
+                                f"lists is missing, cut or not a regular file; {redo}")
+        return pvd, [(t, None) for t, _ in frames]
 
     def reopen_for_restart(self, ctx) -> None:
         """Continue the collection of an earlier run; frames up to ``ctx.t`` are kept.

@@ -31,12 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore.api import OutputError, ScheduledWriter, hookimpl, write_atomically
-from sphcore_plugins.netcdf import case_attributes, header_cut, new_dataset, output_error, rewrite_first
+from sphcore.api import OutputError, ScheduledWriter, hookimpl, leading_complete, write_atomically
+from sphcore_plugins.netcdf import case_attributes, header_cut, new_dataset, output_error, rewrite_first, series_on_disk
 
 TABLE = "wall_loads"
 FILE_NAME = "wall_loads.nc"
 CSV_NAME = "wall_loads.csv"
+HEADER = {"time", "step", "force", "moment"}  # the variables a whole header holds
 COMPONENTS = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
 
 
@@ -142,6 +143,9 @@ class WallLoadsWriter(ScheduledWriter):
             raise output_error(self.path, "write the wall loads' header", err) from err
         self.ds, self.row = ds, 0
 
+    def frames_on_disk(self, ctx):
+        return series_on_disk(Path(ctx.output_dir) / FILE_NAME, HEADER)
+
     def reopen_for_restart(self, ctx) -> None:
         """Keep the rows up to the restart's step and go on appending."""
         import netCDF4
@@ -149,13 +153,12 @@ class WallLoadsWriter(ScheduledWriter):
         if ctx.output_dir is None or not path.exists():
             return
         try:
-            if header_cut(path, {"time", "step", "force", "moment"}):
+            if header_cut(path, HEADER):
                 return
             with netCDF4.Dataset(path) as src:
                 src.set_auto_maskandscale(False)
                 steps, times = src["step"][:], src["time"][:]
-            ok = np.isfinite(times) & (steps <= ctx.step)
-            keep = len(ok) if ok.all() else int(np.argmin(ok))
+            keep = leading_complete(times, steps, ctx.step)
             if keep < len(steps):
                 rewrite_first(path, keep)
             ds = netCDF4.Dataset(path, "a")

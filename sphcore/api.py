@@ -24,6 +24,8 @@
   a launch on several would cost more than the work);
 - the equation of state: :mod:`sphcore.physics.eos` as :data:`eos`;
 - output: :class:`ScheduledWriter` (base of a writer plugin: schedule, restart, write errors),
+  :func:`check_series`, :func:`leading_complete`, :func:`new_record`, :func:`record_frame` (what a
+  restart checks a series file against),
   :class:`Schedule`, :func:`write_atomically` (a file replaced whole or not at all),
   :func:`mark_written` (a file written by other means is sph's: ``--overwrite`` deletes it).
 
@@ -37,11 +39,11 @@ from sphcore.errors import CaseError, Instability, OutputError
 from sphcore.geometry.facegeom import face_distance, first_contact, nearest_point
 from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
 from sphcore.geometry.faces import Faces
-from sphcore.geometry.motion import Motion, MovingGroup, Pose
+from sphcore.geometry.motion import Motion, MovingGroup, Pose, plane_groups, planes_at
 from sphcore.geometry.planes import Planes, outline, particle_distance, plane_distance
 from sphcore.io.atomic import mark_written, write_atomically
 from sphcore.io.schedule import Schedule, schedule_options
-from sphcore.io.writer import ScheduledWriter
+from sphcore.io.writer import ScheduledWriter, check_series, leading_complete, new_record, record_frame
 from sphcore.jit.parallel import by_size, on_threads_by_size
 from sphcore.neighbours.cellgrid import CellGrid, Grid, cell_of, cell_range
 from sphcore.physics import eos
@@ -55,9 +57,9 @@ from sphcore.plugin.hookspecs import hookimpl
 __all__ = [
     "hookimpl", "Option", "CaseError", "Instability", "OutputError",
     "RunContext", "Params", "ParticleState", "Sources", "Fields", "WallTerms", "FLUID", "SPHERE", "GHOST",
-    "Planes", "plane_distance", "particle_distance", "outline", "Motion", "MovingGroup", "Pose",
+    "Planes", "plane_distance", "particle_distance", "outline", "Motion", "MovingGroup", "Pose", "plane_groups", "planes_at",
     "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "face_distance", "first_contact",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
     "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",
-    "eos", "ScheduledWriter", "Schedule", "schedule_options", "write_atomically", "mark_written", "by_size", "on_threads_by_size",
+    "eos", "ScheduledWriter", "check_series", "leading_complete", "new_record", "record_frame", "Schedule", "schedule_options", "write_atomically", "mark_written", "by_size", "on_threads_by_size",
 ]

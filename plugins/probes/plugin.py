@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sphcore.api import SUPPORT, CaseError, OutputError, Schedule, hookimpl
+from sphcore.api import SUPPORT, CaseError, OutputError, Schedule, check_series, hookimpl, new_record, record_frame
 
 from . import figures
 from .config import OPTIONS, TABLE, parse
@@ -73,6 +73,7 @@ class ProbesPlugin:
         self.file: ProbeFile | None = None
         self._failed = False
         self._restart_step: int | None = None
+        self._record: dict = {}  # samples written to probes.nc (kept by the checkpoint)
         self._csv_rows = -1  # samples in the last probes.csv written
         self.motions, self.planes_move, self.moves = [], False, False
 
@@ -88,7 +89,7 @@ class ProbesPlugin:
         # the motion of each probe's wall group (None: fixed), and whether the tank's planes move
         self.motions = [next(g.motion for g in moving if g.name == p.group) if p.group else None
                         for p in self.probes]
-        self.planes_move = any(g.planes for g in moving)
+        self.planes_move = any(len(g.planes) for g in moving)
         # where probes or planes move, the probes are placed anew at every sample (place)
         self.moves = self.planes_move or any(m is not None for m in self.motions)
 
@@ -126,8 +127,18 @@ class ProbesPlugin:
         self.case_planes = case.planes
         self.rho0 = float(ctx.params.rho0)
         self.config, self.case_name = case.config, case.config["case"]["name"] or case.dir.name
-        # a restart keeps the samples up to the checkpoint's step, found at the first output
+        # a restart keeps the samples up to the checkpoint's step, found at the first output;
+        # probes.nc must hold those the checkpoint counts (the record of what was written)
         self._restart_step = ctx.step if ctx.restarting else None
+        self._record = ctx.kept(self) if hasattr(ctx, "kept") else {}  # a stand-in context keeps nothing
+        if not ctx.restarting:
+            new_record(self._record)
+        elif ctx.output_dir is not None:
+            found = ProbeFile(ctx.output_dir).on_disk()
+            if found is not None:
+                kept = check_series(found[0], found[1], self._record, ctx.t, ctx.step)
+                if kept >= 0:
+                    new_record(self._record, (found[1] or [])[:kept])
 
     # ------------------------------------------------------------------ sampling
 
@@ -259,6 +270,7 @@ class ProbesPlugin:
                 self.file.create(self.probes, ctx.case.dim, self.rho0, self.g, self.config, self.case_name)
             is_p = self.is_pressure
             self.file.append(ctx.t, ctx.step, np.where(is_p, values, np.nan), np.where(is_p, np.nan, values), dry)
+            record_frame(self._record, ctx.t, ctx.step)
         except OutputError:
             self._failed = True
             raise

@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sphcore.api import write_atomically
-from sphcore_plugins.netcdf import case_attributes, header_cut, new_dataset, output_error, rewrite_first
+from sphcore.api import leading_complete, write_atomically
+from sphcore_plugins.netcdf import case_attributes, header_cut, new_dataset, output_error, rewrite_first, series_on_disk
 
 if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
     import netCDF4
@@ -124,6 +124,10 @@ class ProbeFile:
             raise output_error(self.path, f"write the sample at step {step}", err) from err
         self.row += 1
 
+    def on_disk(self):
+        """(path, samples) for a restart's check (see sphcore.api.check_series)."""
+        return series_on_disk(self.path, HEADER_VARS)
+
     def reopen(self, last_step) -> dict | None:
         """Reopen an earlier run's file, keep the leading complete samples with step <= ``last_step``
         and go on appending; returns the kept series {time, step, pressure, depth, dry}, or None
@@ -137,8 +141,7 @@ class ProbeFile:
             with netCDF4.Dataset(self.path) as src:
                 src.set_auto_maskandscale(False)
                 steps, times = src["step"][:], src["time"][:]
-            ok = np.isfinite(times) & (steps <= last_step)
-            keep = len(ok) if ok.all() else int(np.argmin(ok))
+            keep = leading_complete(times, steps, last_step)
             if keep < len(steps):
                 rewrite_first(self.path, keep)
             ds = netCDF4.Dataset(self.path, "a")
