@@ -34,10 +34,12 @@ def _vec(file, key, value, dim):
 
 
 def _simple_polygon(file, key, p):
-    """Refuse repeated points and crossing edges (a polygon must be simple)."""
+    """Refuse repeated points, no area (collinear points) and crossing edges (a polygon must
+    be simple and enclose a region)."""
     seg = polygon(p)
+    size = np.ptp(p, axis=0).max()
     length = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1)
-    if np.any(length <= 1e-12 * np.ptp(p, axis=0).max()):
+    if np.any(length <= 1e-12 * size):
         raise CaseError(file, key, f"edge {int(np.argmin(length))} has zero length (repeated point)")
     k = len(seg)
     for i in range(k):
@@ -46,6 +48,12 @@ def _simple_polygon(file, key, p):
                 continue  # neighbours through the closing edge
             if _cross(seg[i], seg[j]):
                 raise CaseError(file, key, f"edges {i} and {j} cross: expected a simple polygon")
+    with np.errstate(all="ignore"):  # in units of the polygon's size: no overflow on huge coordinates
+        x, y = (p[:, 0] - p[0, 0]) / size, (p[:, 1] - p[0, 1]) / size
+        area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    if not area > 1e-12:
+        raise CaseError(file, key, f"the polygon's area is {area:.3g} of its size squared (its points lie on one "
+                        "line): expected points enclosing a region")
 
 
 def _cross(s, t):

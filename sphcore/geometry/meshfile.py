@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
+import stat
 import warnings
 from pathlib import Path
 
@@ -22,6 +24,8 @@ from sphcore.errors import CaseError
 #: a segment, triangle or cell counts as degenerate, and above which a 2D z is refused
 REL_TOL = 1e-12
 SURFACE_TYPES = ("triangle", "quad", "polygon")
+#: largest mesh file read (bytes): only a regular file of at most this size is opened
+MAX_MESH_BYTES = 1 << 30
 
 
 def _fail(case_file, key, path, what: str):
@@ -32,10 +36,20 @@ def _load(path: Path, key, case_file):
     """Read ``path`` with meshio, turning every failure into a CaseError."""
     import meshio
 
-    if not path.exists():
-        raise _fail(case_file, key, path, "no such file (expected a wall mesh file)")
-    if path.is_dir():
+    try:
+        st = os.stat(path)  # through a link: what would be read (a link to /dev/zero is a device)
+    except FileNotFoundError:
+        raise _fail(case_file, key, path, "no such file (expected a wall mesh file)") from None
+    except (OSError, ValueError) as e:  # a name too long, a NUL byte, no permission
+        raise _fail(case_file, key, path, f"cannot read: {getattr(e, 'strerror', None) or e}") from None
+    if stat.S_ISDIR(st.st_mode):
         raise _fail(case_file, key, path, "is a directory (expected a wall mesh file)")
+    if not stat.S_ISREG(st.st_mode):
+        raise _fail(case_file, key, path, "not a regular file (a device, a pipe, a socket): expected a wall "
+                    "mesh file")
+    if st.st_size > MAX_MESH_BYTES:
+        raise _fail(case_file, key, path, f"{st.st_size / 2**20:.0f} MiB, larger than {MAX_MESH_BYTES >> 20} MiB: "
+                    "expected a wall mesh of a size a run can hold")
     try:
         with open(path, "rb"):
             pass

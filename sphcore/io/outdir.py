@@ -54,7 +54,21 @@ def resolve(case, output=None) -> Path:
     if "\0" in rel or any(len(part.encode()) > NAME_MAX for part in Path(norm).parts):
         raise CaseError(case.file, "output.dir", f"expected folder names without NUL bytes, of at most {NAME_MAX} "
                         f"bytes each, got {rel[:40]!r}...")
+    blocked = _not_a_folder(case.dir, Path(norm))
+    if blocked is not None:
+        raise CaseError(case.file, "output.dir", f"{blocked} is a file, not a folder: expected a directory to "
+                        f"write into, got {rel!r}")
     return case.dir / norm
+
+
+def _not_a_folder(base: Path, rel: Path) -> Path | None:
+    """The first path of ``base``/``rel`` on the way to it that exists and is not a directory."""
+    p = base
+    for part in rel.parts:
+        p = p / part
+        if p.exists() and not p.is_dir():
+            return p
+    return None
 
 
 # -- the marker and manifest ---------------------------------------------------------------
@@ -271,6 +285,10 @@ def _prepare(out: Path, case_file, overwrite, restart, lock) -> Manifest:
                           f"(pass the link's target with --output)")
     if out.exists() and not out.is_dir():
         raise OutputError(f"output path {out} exists and is not a directory")
+    blocked = _not_a_folder(Path(out.anchor), out.relative_to(out.anchor)) if out.is_absolute() else \
+        _not_a_folder(Path("."), out)
+    if blocked is not None:
+        raise OutputError(f"output path {out}: {blocked} is a file, not a folder")
     own = []  # the lock taken here, released on an error below
 
     def take() -> WriterLock:
@@ -286,6 +304,8 @@ def _prepare(out: Path, case_file, overwrite, restart, lock) -> Manifest:
         # a lock file alone (a run that failed before its marker) leaves the directory empty
         if out.exists() and any(p.name != LOCK for p in out.iterdir()) and not restart:
             if not overwrite:
+                if (out / LOCK).is_file() and not (out / LOCK).is_symlink():
+                    WriterLock(out).release()  # a live run writing it is named (refused here)
                 raise OutputError(f"output directory {out} exists and is not empty: pass --overwrite, --restart or "
                                   "--output DIR")
             marker = read_marker(out)

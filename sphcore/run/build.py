@@ -91,6 +91,11 @@ def block_positions(case, k, b):
     bad = np.argwhere(d < r * (1.0 - INSIDE_TOL))
     if bad.size:
         i, p = bad[0]
+        if case.config["particles"]["radius"] is not None and d[i, p] >= 0.5 * dx * (1.0 - INSIDE_TOL):
+            # inside the walls with the default radius dx/2: the radius set is what pushes it out
+            raise CaseError(case.file, "particles.radius", f"{r:g} m puts the particle at {pos[i].round(9).tolist()} "
+                            f"of blocks[{k}] within a radius of wall plane {p} (distance {d[i, p]:.6g} m): expected "
+                            "a radius of about dx/2, smaller than the particles' distance to the walls")
         raise CaseError(case.file, f"blocks[{k}]", f"particle at {pos[i].round(9).tolist()} is outside wall plane {p} "
                         f"(distance {d[i, p]:.6g} m < radius {r:.6g} m){_rounding_hint(k, b, dx, pos[i])}")
     if case.faces.count == 0:
