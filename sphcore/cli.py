@@ -2,7 +2,7 @@
 
 Exit status: 0 done; 1 the run went unstable or could not write its output (what was
 written is kept); 2 bad input (case, options, output directory), nothing written; 128 + signal number when stopped by SIGINT
-or SIGTERM after writing a checkpoint.
+or SIGTERM after writing a checkpoint, or before the run began (one line, nothing written).
 """
 
 from __future__ import annotations
@@ -73,13 +73,47 @@ def _fail(msg, status):
     return status
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived outside a run's own handler (while sph starts: imports, set-up)."""
+
+
+def _terminated(signum, frame):
+    raise Terminated()
+
+
 def main(argv=None) -> int:
+    # SIGTERM (and Ctrl-C, as KeyboardInterrupt) while the modules load or the case is set
+    # up ends with one line; a run installs its own handlers (checkpoint, then stop)
+    caught = threading_main() and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
+    if caught:
+        signal.signal(signal.SIGTERM, _terminated)
     try:
         return _main(argv)
     except BrokenPipeError:  # `sph options | head`: the reader left; stop quietly, as other tools do
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # Python's own flush at exit must not fail again
         return 128 + signal.SIGPIPE
+    except KeyboardInterrupt:
+        return _fail("interrupted while starting; nothing written", 128 + signal.SIGINT)
+    except Terminated:
+        return _fail("terminated while starting; nothing written", 128 + signal.SIGTERM)
+    finally:
+        if caught:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def default_termination() -> None:
+    """SIGTERM back to the system's default (a command that starts processes of its own:
+    they must not inherit sph's start-up handler)."""
+    if threading_main() and signal.getsignal(signal.SIGTERM) is _terminated:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def threading_main() -> bool:
+    """Whether this is the main thread (only it may install signal handlers)."""
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
 
 
 def _main(argv=None) -> int:
@@ -88,6 +122,7 @@ def _main(argv=None) -> int:
     if args.command == "sweep":
         from sphcore.sweep import main as sweep_main
 
+        default_termination()  # the sweep's cluster and variants are processes of their own
         return sweep_main(args)
     from sphcore.plugin import pluginhost
     from sphcore.run import runner
@@ -103,13 +138,15 @@ def _main(argv=None) -> int:
         if args.command == "check":
             # the same validation as `sph run` (case, memory estimate, output path, first
             # step), so that whatever check accepts, run starts
-            from sphcore.run import budget
             from sphcore.run.build import build
 
             case, pm = runner.load(args.case_dir, args.overrides, args.t_end)
             out = runner.output_path(case, args.output)
-            sim = build(case, pm, settle=False)  # particles, sound speed, plugin set-up; no step
-            dt = budget.check_first_step(sim)
+            try:
+                sim = build(case, pm, settle=False)  # particles, sound speed, plugin set-up; no step
+            except CaseError as e:  # as run says it: a key given on the command line names the option
+                raise runner.blame_option(e, args.overrides, args.t_end) from None
+            dt = runner.first_step(sim, args.overrides, args.t_end)
             walls = (f"{case.faces.count} wall faces ({sim.state.removed_by_walls} particles of the blocks "
                      "not created: inside a solid or closer than a radius to a face), " if case.faces.count else "")
             print(f"{case.file}: ok: {case.dim}D, {sim.state.n} particles, {case.planes.count} wall planes, {walls}"
@@ -130,6 +167,8 @@ def _main(argv=None) -> int:
         return _fail(str(e), 2)
     except KeyboardInterrupt:  # Ctrl-C before the run's own handler is installed (set-up)
         return _fail("interrupted during set-up; nothing written", 128 + signal.SIGINT)
+    except Terminated:
+        return _fail("terminated during set-up; nothing written", 128 + signal.SIGTERM)
     summary, status = result.summary, result.status
     print(f"{summary['case']}: {status}: t = {summary['t']:.6g} s, {summary['steps']} steps, "
           f"{summary['n_particles']} particles, {summary['wall_time_s']:.2f} s wall, "

@@ -15,6 +15,7 @@ import os
 
 import numpy as np
 
+from sphcore.case import defaults
 from sphcore.errors import CaseError
 
 #: bytes per particle and dimension: the state (pos, vel, rho, p, m, radius, kind, id), the
@@ -153,10 +154,30 @@ def check_first_step(sim) -> float:
         raise CaseError(case.file, "time.dt", "required: no sound speed, velocity or force limits the step")
     t_end = sim.t_end
     if t_end + dt <= t_end or sim.t + dt <= sim.t:
-        raise CaseError(case.file, key, f"the time step {dt:.3g} s is below the round-off of t = {t_end:g} s: "
-                        "time would not advance")
+        # a step of a physical size lost in the round-off of t: the end time is what is too far
+        blame = "time.t_end" if dt >= MIN_PLAIN_STEP else key
+        raise CaseError(case.file, blame, f"the time step {dt:.3g} s is below the round-off of t = {t_end:g} s: "
+                        "time would not advance (expected a shorter time.t_end or a longer step)")
     steps = (t_end - sim.t) / dt
     if steps > tcfg["max_steps"]:
-        raise CaseError(case.file, key, f"a time step of {dt:.3g} s needs {steps:.3g} steps to reach "
+        blame, what = _step_count_key(case, key)
+        raise CaseError(case.file, blame, f"{what}a time step of {dt:.3g} s needs {steps:.3g} steps to reach "
                         f"time.t_end = {t_end:g} s, more than time.max_steps = {tcfg['max_steps']}")
     return dt
+
+
+#: a time step (s) below which a step that cannot advance t is blamed on the step, not on t_end
+MIN_PLAIN_STEP = 1e-12
+
+
+def _step_count_key(case, key: str) -> tuple[str, str]:
+    """(key, opening words) for a run needing too many steps: the sound speed when the
+    acoustic limit binds and the case raised it, else the limit's own key, else time.t_end."""
+    ecfg = case.config["eos"]
+    if key == "time.cfl":
+        if ecfg["c0"] is not None:
+            return "eos.c0", f"c0 = {ecfg['c0']:g} m/s: "
+        if ecfg["c0_factor"] != defaults.CORE["eos"]["c0_factor"].default:
+            return "eos.c0_factor", f"c0_factor = {ecfg['c0_factor']:g}: "
+        return "time.t_end", ""
+    return key, ""

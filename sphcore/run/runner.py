@@ -89,7 +89,7 @@ class Stopped(Exception):
         super().__init__(f"stopped by {signal.Signals(signum).name}")
 
 
-def _blame_option(err: CaseError, overrides, t_end) -> CaseError:
+def blame_option(err: CaseError, overrides, t_end) -> CaseError:
     """A CaseError about a key given on the command line names the option, not case.toml."""
     if t_end is not None and err.key == "time.t_end":
         return CaseError("--t-end", err.key, err.expected)
@@ -116,8 +116,17 @@ def load(case_dir, overrides=(), t_end=None):
         pm = pluginhost.make_manager(case.config["plugins"]["use"], file)
         pluginhost.configure(pm, case)  # plugins check their own tables
     except CaseError as e:
-        raise _blame_option(e, overrides, t_end) from None
+        raise blame_option(e, overrides, t_end) from None
     return case, pm
+
+
+def first_step(sim, overrides=(), t_end=None) -> float:
+    """The first step's size (s), checked (:func:`sphcore.run.budget.check_first_step`);
+    a refusal about a key given on the command line names the option."""
+    try:
+        return budget.check_first_step(sim)
+    except CaseError as e:
+        raise blame_option(e, overrides, t_end) from None
 
 
 def output_path(case, output=None) -> Path:
@@ -174,12 +183,12 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
         try:
             sim = build(case, pm, out, restarting=restart)
         except CaseError as e:  # the relaxation's errors name its key, which may have come from --set
-            raise _blame_option(e, overrides, t_end) from None
+            raise blame_option(e, overrides, t_end) from None
         relaxed = sim.ctx.stats("core").get("relax")
         if relaxed and mode != "off" and not restart:
             print(f"[sph] relaxed in {relaxed['wall_time_s']:.1f} s: particles moved up to {relaxed['max_move_dx']:.3g} dx, "
                   f"last speed {relaxed['last_speed_m_s']:.2g} m/s", file=sys.stderr, flush=True)
-        budget.check_first_step(sim)
+        first_step(sim, overrides, t_end)
         manifest = prepare_output(out, overwrite, restart, case.file, lock)
     except BaseException:
         if lock is not None:
