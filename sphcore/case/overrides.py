@@ -42,12 +42,27 @@ def key_text(path) -> str:
     return out
 
 
-def parse_value(raw: str):
-    """A value as ``--set`` reads it: TOML, or a bare string (one parser for all)."""
+#: deepest nesting of arrays and tables in a value (as in a case file, sphcore.case.model)
+MAX_DEPTH = 32
+
+
+def parse_value(raw: str, key: str = "", option: str = "--set"):
+    """A value as ``--set`` reads it: TOML, or a bare string (one parser for all). A value
+    nested deeper than MAX_DEPTH is a CaseError naming ``option`` and ``key``."""
+    depth = deepest = 0
+    for c in raw:
+        depth += (c in "[{") - (c in "]}")
+        deepest = max(deepest, depth)
+    if deepest > MAX_DEPTH:
+        raise CaseError(option, key or raw[:40], f"a value nested {deepest} deep: expected arrays and tables "
+                        f"nested at most {MAX_DEPTH} deep")
     try:
         return tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
         return raw  # a bare word, e.g. --set kernel.name=cubic_spline
+    except RecursionError:
+        raise CaseError(option, key or raw[:40], f"a value nested too deep to read: expected arrays and tables "
+                        f"nested at most {MAX_DEPTH} deep") from None
 
 
 def parse_set(text: str, option: str = "--set") -> tuple:
@@ -55,7 +70,7 @@ def parse_set(text: str, option: str = "--set") -> tuple:
     if "=" not in text:
         raise CaseError(option, text, "expected section.key=value")
     key, raw = text.split("=", 1)
-    return parse_key(key, option), parse_value(raw)
+    return parse_key(key, option), parse_value(raw, key.strip(), option)
 
 
 def fold(raw: dict, overrides, file="--set") -> list:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import os
 import shlex
 import signal
@@ -95,8 +96,9 @@ def _client(distributed, scheduler, workers, processes, n_variants):
     if scheduler:
         try:
             return distributed.Client(scheduler, timeout="20s"), f"scheduler {scheduler}"
-        except (OSError, TimeoutError) as e:
-            raise SweepError(f"--scheduler {scheduler}: cannot connect: {e}") from None
+        except (OSError, TimeoutError, ValueError, TypeError) as e:
+            raise SweepError(f"--scheduler {scheduler}: cannot connect: {e} (expected an address such as "
+                             "tcp://host:8786)") from None
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     n = max(1, min(workers or cores, n_variants))
     kwargs = {"env": {"NUMBA_NUM_THREADS": "1"}} if processes else {}
@@ -183,6 +185,8 @@ def run(p: Plan, output=None, scheduler=None, workers=None, processes=True, time
 
     distributed = _distributed()
     out = Path(output or p.case_dir / "sweep").resolve()
+    if out.exists() and not out.is_dir() or any(q.exists() and not q.is_dir() for q in out.parents):
+        raise OutputError(f"sweep directory {out}: a file is in the way (expected a directory, or none)")
     if out.exists() and any(out.iterdir()) and not overwrite:
         raise OutputError(f"sweep directory {out} exists and is not empty: pass --overwrite or --output DIR")
     client, where = _client(distributed, scheduler, workers, processes, len(p.variants))
@@ -263,6 +267,8 @@ def main(args) -> int:
             raise SweepError("--workers sizes the local cluster; a --scheduler cluster has its own workers")
         if args.workers is not None and args.workers < 1:
             raise SweepError(f"--workers {args.workers}: expected a positive number")
+        if args.timeout is not None and not (math.isfinite(args.timeout) and args.timeout > 0):
+            raise SweepError(f"--timeout {args.timeout}: expected a positive number of seconds")
         p = plan(args.case_dir, args.vary, args.overrides, args.t_end)
         if args.dry_run:
             for v in p.variants:

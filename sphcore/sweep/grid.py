@@ -97,7 +97,7 @@ def parse_vary(text: str) -> Axis:
     keys = [k.strip() for k in lhs.split(",")]
     paths = tuple(parse_key(k) for k in keys)
     items = split_values(rhs, lhs.strip())
-    values = [parse_value(item) for item in items]
+    values = [parse_value(item, lhs.strip(), "--vary") for item in items]
     if len(paths) == 1:
         points = tuple((v,) for v in values)
     else:
@@ -121,8 +121,20 @@ def _clean(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9._=+-]", "_", text)[:40]
 
 
+#: most variants one sweep runs (and validates before it starts: about 10 ms each)
+MAX_VARIANTS = 1000
+
+
 def expand(axes, sets=()) -> list[Variant]:
-    """The Cartesian product of the axes, in order (the first axis slowest)."""
+    """The Cartesian product of the axes, in order (the first axis slowest); refused above
+    MAX_VARIANTS (CaseError naming the --vary keys)."""
+    size = 1
+    for a in axes:
+        size *= len(a)
+    if size > MAX_VARIANTS:
+        raise CaseError("--vary", ", ".join(k for a in axes for k in a.keys), f"{' x '.join(str(len(a)) for a in axes)}"
+                        f" = {size} variants, more than {MAX_VARIANTS} in one sweep: expected fewer values (split the "
+                        "grid into several sweeps)")
     keys = [k for a in axes for k in a.keys]
     dup = {k for k in keys if keys.count(k) > 1}
     if dup:
