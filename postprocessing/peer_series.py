@@ -65,6 +65,17 @@ def load(path: Path, key: str | None, column: str | None = None) -> tuple[np.nda
     return a[:, 0], a[:, 1]
 
 
+def checked(path: Path, t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The series if it is one: two 1-D arrays of the same length, at least two finite rows,
+    times increasing; else a ValueError naming ``path``."""
+    if t.ndim != 1 or p.shape != t.shape:
+        raise ValueError(f"{path}: time and values of different shapes {t.shape} and {p.shape}: expected two "
+                         "columns of numbers")
+    if len(t) < 2 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))) or not np.all(np.diff(t) > 0):
+        raise ValueError(f"{path}: {len(t)} rows: expected at least two rows of finite numbers, times increasing")
+    return t, p
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("file", type=Path, help="the peer's series: CSV or JSON (see above)")
@@ -80,8 +91,12 @@ def main(argv=None) -> int:
         if not args.file.is_file():
             raise RunError(f"{args.file}: no such file (expected the peer's series, CSV or JSON)")
         try:
-            t, p = load(args.file, args.key, args.column)
-        except (OSError, UnicodeDecodeError, ValueError) as err:  # json.JSONDecodeError is a ValueError
+            for name in ("H", "rho", "g"):
+                value = getattr(args, name)
+                if not (np.isfinite(value) and value > 0):
+                    raise RunError(f"--{name} {value}: expected a positive number")
+            t, p = checked(args.file, *load(args.file, args.key, args.column))
+        except (OSError, UnicodeDecodeError, ValueError, TypeError) as err:  # json.JSONDecodeError: a ValueError
             raise RunError(err if str(args.file) in str(err) else f"{args.file}: {err}") from None
     except RunError as err:
         return refuse(PROG, err)

@@ -194,11 +194,16 @@ def open_run(path, kind: str | None = None) -> Run:
             config = json.loads(summary.read_text()).get("config") or {}
         except (OSError, ValueError, AttributeError) as err:
             raise RunError(f"{summary}: cannot read the run's summary: {err}") from None
+        if not isinstance(config, dict) or not all(isinstance(v, dict) for k, v in config.items() if k != "blocks"):
+            raise RunError(f"{summary}: its config is not a validated case (expected section tables)")
     elif kind is not None:
         raise RunError(f"{d}: no summary.json (expected the output directory of a finished sph run)")
     run = Run(d, config, None if p.is_dir() else p)
     if kind is not None and config:
-        _check_kind(run, kind)
+        try:
+            _check_kind(run, kind)
+        except (KeyError, TypeError, IndexError, AttributeError) as err:
+            raise RunError(f"{summary}: its config is not a validated case ({type(err).__name__}: {err})") from None
     return run
 
 
