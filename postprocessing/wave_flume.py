@@ -6,9 +6,9 @@ Reads   RUN/summary.json (the case: water depth, flume length, the piston's sine
 Writes  RUN/wave_flume.png: the free-surface elevation at every gauge with its measuring
         window shaded, and H/S against kh with Biesel's curve (every RUN given on one plot).
 
-The piston is the first ``[[domain.walls]]`` entry whose motion has a ``sine_translation``
-part: its stroke S is twice the amplitude, its period T gives omega = 2 pi / T, and k
-solves the linear dispersion relation omega^2 = g k tanh(k h) (h the depth of still water,
+The piston is the first ``[[domain.planes]]`` (or else ``[[domain.walls]]``) entry whose
+motion has a ``sine_translation`` part: its stroke S is twice the amplitude, its period T
+gives omega = 2 pi / T, and k solves the linear dispersion relation omega^2 = g k tanh(k h) (h the depth of still water,
 the first fluid block's top above the floor). Biesel's first-order transfer function of a
 piston (Biesel & Suquet 1951; Dean & Dalrymple, Water Wave Mechanics for Engineers and
 Scientists, ch. 6) is
@@ -154,45 +154,68 @@ def flume(run) -> dict:
     dim = cfg.get("case", {}).get("dim")
     if dim != 2:
         raise RunError(f"{run.dir}: a {dim}D run (expected a 2D wave flume)")
-    piston = None
-    for k, wall in enumerate(cfg.get("domain", {}).get("walls") or []):
-        for part in wall.get("motion") or []:
-            if part.get("type") == "sine_translation":
-                piston = (k, wall, part)
-                break
-        if piston:
-            break
+    domain = cfg.get("domain", {})
+    piston = None  # (key of the motion, the entry, its sine_translation part)
+    for kind in ("planes", "walls"):
+        for k, entry in enumerate(domain.get(kind) or []):
+            for part in entry.get("motion") or []:
+                if part.get("type") == "sine_translation" and piston is None:
+                    piston = (f"domain.{kind}[{k}]", entry, part)
     if piston is None:
-        raise RunError(f"{run.dir}: no [[domain.walls]] entry moves with a sine_translation "
+        raise RunError(f"{run.dir}: no [[domain.planes]] or [[domain.walls]] entry moves with a sine_translation "
                        f"(expected a piston wave maker)")
-    k, wall, part = piston
+    key, wall, part = piston
     axis = np.asarray(part["axis"], float)
     axis = axis / np.linalg.norm(axis)
     if abs(axis[0]) < 0.999:
-        raise RunError(f"{run.dir}: domain.walls[{k}] moves along {part['axis']} (expected a piston moving along x)")
+        raise RunError(f"{run.dir}: {key} moves along {part['axis']} (expected a piston moving along x)")
     period = part.get("period") or (1.0 / part["frequency"] if part.get("frequency") else None)
-    if wall.get("shape") == "box":
+    if key.startswith("domain.planes"):
+        if float(np.asarray(wall["normal"], float)[0]) <= 0.0 or abs(float(wall["normal"][1])) > 1e-12:
+            raise RunError(f"{run.dir}: {key} has the normal {wall['normal']} (expected a piston facing +x)")
+        face = float(wall["point"][0])
+    elif wall.get("shape") == "box":
         face = float(wall["max"][0])
     elif wall.get("points"):
         face = float(max(p[0] for p in wall["points"]))
     else:
-        raise RunError(f"{run.dir}: domain.walls[{k}] is a {wall.get('shape')} (expected a box or a polygon piston)")
+        raise RunError(f"{run.dir}: {key} is a {wall.get('shape')} (expected a box or a polygon piston)")
+    floor, far = _floor_and_far(run, domain)
     block = run.first_block()
     if not block:
         raise RunError(f"{run.dir}: no fluid block in the case")
     _, hi = run.block_extent(block)
-    floor = float(cfg["domain"]["min"][1])
     gauges = [(d["name"], float(d["point"][0])) for d in (cfg.get("probes") or {}).get("depth") or []]
     if not gauges:
         raise RunError(f"{run.dir}: the case has no [[probes.depth]] gauges")
     g = abs(float(cfg.get("physics", {}).get("gravity", [0.0, -9.81])[1]))
-    return {"h": hi[1] - floor, "face": face, "far": float(cfg["domain"]["max"][0]),
+    return {"h": hi[1] - floor, "face": face, "far": far,
             "S": 2.0 * abs(float(part["amplitude"])), "T": float(period), "g": g,
             "ramp_end": float(part.get("ramp_start", 0.0)) + float(part.get("ramp", 0.0)),
-            "ramp_start": float(part.get("ramp_start", 0.0)), "gauges": gauges, "wall": k,
+            "ramp_start": float(part.get("ramp_start", 0.0)), "gauges": gauges, "load": f"{key}.motion",
             # X(t) = S/2 sin(omega t + phase0) along +x (sphcore's sine_translation, t absolute)
             "phase0": math.radians(float(part.get("phase", 0.0))) + (math.pi if part["amplitude"] * axis[0] < 0
                                                                      else 0.0)}
+
+
+def _floor_and_far(run, domain) -> tuple[float, float]:
+    """The floor's height and the far wall's x: the box's (domain.min, domain.max), else the
+    fixed planes facing up and facing -x."""
+    if domain.get("min") is not None and domain.get("max") is not None:
+        return float(domain["min"][1]), float(domain["max"][0])
+    floor = far = None
+    for entry in domain.get("planes") or []:
+        if entry.get("motion"):
+            continue
+        n = np.asarray(entry["normal"], float)
+        n = n / np.linalg.norm(n)
+        if n[1] > 0.999:
+            floor = float(entry["point"][1])
+        elif n[0] < -0.999:
+            far = float(entry["point"][0])
+    if floor is None or far is None:
+        raise RunError(f"{run.dir}: no floor and far wall (expected domain.min/max or fixed planes facing up and -x)")
+    return floor, far
 
 
 def wave_heights(t, eta):
@@ -252,7 +275,7 @@ def paddle_force(run, m, margin=0.0) -> dict | None:
         data = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     except (OSError, IndexError, ValueError) as err:
         raise RunError(f"{path}: cannot read the wall loads: {err}") from None
-    col = f"domain.walls[{m['wall']}].motion.Fx"
+    col = f"{m['load']}.Fx"
     if col not in header:
         return None
     # a row is the mean force over the interval that ends at its t: it stands for the midpoint

@@ -64,7 +64,7 @@ def test_the_image_of_a_moving_wall_has_its_velocity_and_feels_its_acceleration(
     v = np.array([[0.7, -0.4, 0.25][:dim]])
     p = np.array([1500.0])
     g = np.array([0.0, -9.81, 0.0][:dim]) if dim == 2 else np.array([0.0, 0.0, -9.81])
-    src, index, rho = _generate(x, v, p, planes, WallMotion.of(pose), g, free_slip)
+    src, index, rho = _generate(x, v, p, planes, WallMotion.of(pose, planes.count), g, free_slip)
     assert src.n == 1 and index.tolist() == [0]
     d = 0.01
     foot = x[0] - d * n
@@ -94,7 +94,7 @@ def test_a_corner_image_follows_the_wall_on_both_planes(free_slip):
     x = pose.to_world(np.array([0.012, 0.017]))[None, :]
     v = np.array([[0.7, -0.4]])
     p = np.array([800.0])
-    src, _, rho = _generate(x, v, p, planes, WallMotion.of(pose), G2, free_slip)
+    src, _, rho = _generate(x, v, p, planes, WallMotion.of(pose, planes.count), G2, free_slip)
     assert src.n == 3  # across the left wall, the floor, and both
     corner = int(np.argmax(np.linalg.norm(src.pos - x, axis=1)))
     xg = src.pos[corner]
@@ -114,7 +114,7 @@ def test_a_corner_image_follows_the_wall_on_both_planes(free_slip):
     spin = _pose(2, theta=0.2)
     planes = _tank(2, spin)
     x = spin.to_world(np.array([0.012, 0.017]))[None, :]
-    src, _, rho = _generate(x, v, p, planes, WallMotion.of(spin), G2, free_slip=False)
+    src, _, rho = _generate(x, v, p, planes, WallMotion.of(spin, planes.count), G2, free_slip=False)
     corner = int(np.argmax(np.linalg.norm(src.pos - x, axis=1)))
     mid = 0.5 * (x[0] + src.pos[corner])
     np.testing.assert_allclose(mid, spin.to_world(np.zeros(2)), atol=1e-15)  # the corner of the tank
@@ -144,7 +144,7 @@ def test_walls_at_rest_give_the_fixed_wall_images_to_the_bit(dim, free_slip):
     fixed = MirrorImages(planes.normals, planes.offsets, free_slip=free_slip)
     a = fixed.generate(fluid, kind, constants)
     a = [x.copy() for x in a]
-    rest = WallMotion.of(Pose.rest(dim))
+    rest = WallMotion.of(Pose.rest(dim), planes.count)
     moving = MirrorImages(planes.normals, planes.offsets, free_slip=free_slip)
     b = moving.generate(fluid, kind, constants, walls=PlaneGroup(planes.normals, planes.offsets), motion=rest)
     assert a[0].shape[0] > 1000
@@ -163,14 +163,14 @@ def test_modified_pressure_takes_the_wall_acceleration_with_the_whole_density():
     vel = rng.normal(0.0, 0.5, (400, 2))
     p = rng.uniform(0.0, 2000.0, 400)
     xs = np.array([0.0, 0.6])
-    src, _, rho = _generate(pos, vel, p, planes, WallMotion.of(pose), G2)
+    src, _, rho = _generate(pos, vel, p, planes, WallMotion.of(pose, planes.count), G2)
     P = p - RHO0 * (pos - xs) @ G2
     mirror = MirrorImages(planes.normals, planes.offsets)
     fluid = Fields(pos, vel, rho, P, np.full(400, 0.1))
     walls = PlaneGroup(planes.normals, planes.offsets)
     mod = mirror.generate(fluid, np.full(400, FLUID, np.int8), FluidConstants(SUPPORT, G2, RHO0, C0, GAMMA,
                                                                                 rho_ref=RHO0),
-                          walls=walls, motion=WallMotion.of(pose))
+                          walls=walls, motion=WallMotion.of(pose, planes.count))
     assert mod.n == src.n > 50
     np.testing.assert_allclose(mod.p, src.p - RHO0 * (src.pos - xs) @ G2, rtol=0, atol=1e-9)
 
@@ -189,6 +189,7 @@ def test_the_plugin_honours_moving_walls_but_refuses_moving_faces(tmp_path):
                                                                      "domain.motion": [sway]}))
     case, pm = runner.load(case_dir)
     assert case.moving and pm.get_plugin("ghost").tank is case.moving[0]
+    assert pm.get_plugin("ghost").groups == (case.moving[0],)
 
 
 # -- whole runs -------------------------------------------------------------------------------
@@ -224,6 +225,27 @@ def test_a_tank_carried_at_constant_velocity_is_the_fixed_tank_seen_from_a_movin
     assert fixed["steps"] == moving["steps"] == round(t_end / 2e-4)
     assert fixed["ghost"]["ghosts_last"] == moving["ghost"]["ghosts_last"] > 50  # the walls act all along
     assert np.abs(v_f).max() > 0.1  # the water moves
+    np.testing.assert_allclose(x_m - U * t_end, x_f, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(v_m - U, v_f, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(p_m, p_f, rtol=1e-11, atol=1e-8)
+
+
+@pytest.mark.parametrize("wall", ["free_slip", "no_slip"])
+def test_two_groups_of_planes_carried_together_are_the_fixed_walls_seen_from_a_moving_frame(tmp_path, wall):
+    """The tank and a wall plane of its own at x = 0.33 (within the support of the water,
+    whose images it makes, corners with the floor included), both carried at U = (0.8, 0):
+    each plane's images take its own group's motion (a row per plane), and the run is the
+    fixed one seen from a moving frame to round-off, as for the tank alone."""
+    U, t_end = np.array([0.8, 0.0]), 0.01
+    plane = {"normal": [-1.0, 0.0], "point": [0.33, 0.0]}
+    motion = [{"type": "constant_velocity", "velocity": U.tolist()}]
+    fixed, x_f, v_f, p_f = _run(tmp_path, "fixed", {"ghost.wall": wall, "domain.planes": [plane]})
+    moving, x_m, v_m, p_m = _run(tmp_path, "moving", {"ghost.wall": wall, "blocks[0].velocity": U.tolist(),
+                                                       "domain.planes": [{**plane, "motion": motion}],
+                                                       "domain.motion": motion})
+    assert [g.name for g in moving.simulation.ctx.case.moving] == ["domain.motion", "domain.planes[0].motion"]
+    assert fixed["ghost"]["ghosts_last"] == moving["ghost"]["ghosts_last"] > 50
+    assert np.abs(v_f).max() > 0.1
     np.testing.assert_allclose(x_m - U * t_end, x_f, rtol=0, atol=1e-12)
     np.testing.assert_allclose(v_m - U, v_f, rtol=0, atol=1e-10)
     np.testing.assert_allclose(p_m, p_f, rtol=1e-11, atol=1e-8)

@@ -31,8 +31,8 @@ def test_the_tank_and_a_wall_move_as_given(tmp_path):
                             "domain.walls": [{**PADDLE, "tank": True}, {**PADDLE, "min": [0.8, 0.0], "max": [0.9, 0.3],
                                                                         "motion": [SWAY]}]})
     tank, paddle = case.moving
-    assert tank.name == "domain.motion" and tank.planes and tank.faces.tolist() == [0, 1, 2, 3]
-    assert paddle.name == "domain.walls[1].motion" and not paddle.planes and paddle.faces.tolist() == [4, 5, 6, 7]
+    assert tank.name == "domain.motion" and tank.planes.tolist() == [0, 1, 2, 3] and tank.faces.tolist() == [0, 1, 2, 3]
+    assert paddle.name == "domain.walls[1].motion" and paddle.planes.tolist() == [] and paddle.faces.tolist() == [4, 5, 6, 7]
     t = 0.3
     pose = tank.motion.pose(t)
     theta = math.radians(4.0) * math.sin(2 * math.pi * t / 1.63)
@@ -40,6 +40,21 @@ def test_the_tank_and_a_wall_move_as_given(tmp_path):
     ramp = (t / 0.5) ** 3 * (10 - 15 * t / 0.5 + 6 * (t / 0.5) ** 2)
     assert pose.shift[0] == pytest.approx(ramp * 0.02 * math.sin(2 * math.pi * t), abs=1e-15)
     assert paddle.motion.pose(t).shift[0] == pytest.approx(0.02 * math.sin(2 * math.pi * t), abs=1e-15)
+
+
+def test_a_plane_with_a_motion_of_its_own_moves_alone(tmp_path):
+    """A [[domain.planes]] entry with a motion (a piston) is its own group, named by its key;
+    the tank's motion carries the other planes (the box's four first, then the entries)."""
+    piston = {"normal": [1.0, 0.0], "point": [0.05, 0.0], "motion": [SWAY]}
+    case = _load(tmp_path, {"domain.planes": [{"normal": [0.0, 1.0], "point": [0.0, 0.01]}, piston],
+                            "domain.motion": [ROLL]})
+    tank, own = case.moving
+    assert own.name == "domain.planes[1].motion" and own.planes.tolist() == [5] and own.faces.tolist() == []
+    assert tank.planes.tolist() == [0, 1, 2, 3, 4] and math.isinf(own.reach)
+    assert own.motion.pose(0.25).shift[0] == pytest.approx(0.02, abs=1e-15)
+    # without the tank's motion the other planes stay fixed: one group
+    case = _load(tmp_path, {"domain.planes": [piston]})
+    assert [g.name for g in case.moving] == ["domain.planes[0].motion"] and case.moving[0].planes.tolist() == [4]
 
 
 def test_a_case_without_motion_has_no_moving_group(tmp_path):
@@ -57,6 +72,9 @@ def test_a_samples_file_is_read_with_comments_a_header_and_any_separator(tmp_pat
 GOOD_SERIES = "0 0\n0.001 0.1\n0.003 0.2\n0.01 0.1\n"
 #: (changes, files, the key named, words of the message)
 BAD = {
+    "plane motion without type": ({"domain.planes": [{"normal": [1.0, 0.0], "point": [0.0, 0.0],
+                                                      "motion": [{"amplitude": 1.0}]}]}, None,
+                                  "domain.planes[0].motion[0].type", "required"),
     "no type": ({"domain.motion": [{"amplitude": 1.0}]}, None, "domain.motion[0].type", "required"),
     "unknown type": ({"domain.motion": [{**SWAY, "type": "wobble"}]}, None, "domain.motion[0].type", "expected"),
     "unknown key": ({"domain.motion": [{**SWAY, "speed": 1.0}]}, None, "domain.motion[0].speed", "unknown key"),

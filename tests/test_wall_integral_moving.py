@@ -40,12 +40,17 @@ FACE_TANK = {"domain.min": [-1.0, -1.0], "domain.max": [2.0, 2.0],
              "domain.walls": [{"shape": "box", "min": [0.0, 0.0], "max": [1.0, 1.0], "fluid": "inside"}]}
 
 
-@pytest.mark.parametrize("walls", ["planes", "faces"])
+#: a wall plane of its own at x = 0.33, within the kernel support of the water, beside the box's four: moving, it is a group apart
+WALL = {"normal": [-1.0, 0.0], "point": [0.33, 0.0]}
+
+
+@pytest.mark.parametrize("walls", ["planes", "faces", "groups"])
 def test_a_tank_carried_at_constant_velocity_is_the_fixed_tank_seen_from_a_moving_frame(tmp_path, walls):
     """Water released in a tank, and the same tank and water carried at U = (0.8, 0) m/s:
     50 steps of 2e-4 s give positions differing by U t, velocities by U and densities equal,
-    to round-off, whether the tank is the domain's planes or a box of faces taken into its
-    own frame. Measured: planes 7e-12 m, 3e-9 m/s, 1.4e-10 in density; faces 6e-11 m,
+    to round-off, whether the tank is the domain's planes, a box of faces taken into its
+    own frame, or two groups of planes (the box and a plane of its own at x = 0.33, each
+    group's wall velocity on its part of G_w). Measured: planes 7e-12 m, 3e-9 m/s, 1.4e-10 in density; faces 6e-11 m,
     1.8e-7 m/s, 3.7e-9 (round-off at the box's corners, where the nearest face changes,
     grows through the contacts; the water moves at up to 0.18 m/s). Without the walls'
     velocity in continuity (2 rho v_i . G_w instead of 2 rho (v_i - v_w) . G_w) the carried
@@ -55,6 +60,9 @@ def test_a_tank_carried_at_constant_velocity_is_the_fixed_tank_seen_from_a_movin
     motion = [{"type": "constant_velocity", "velocity": U.tolist()}]
     if walls == "planes":
         fixed_changes, moving_changes = {}, {"domain.motion": motion}
+    elif walls == "groups":  # the tank and a plane of its own, both carried: two groups of planes
+        fixed_changes = {"domain.planes": [WALL]}
+        moving_changes = {"domain.planes": [{**WALL, "motion": motion}], "domain.motion": motion}
     else:
         tank = dict(FACE_TANK["domain.walls"][0])
         fixed_changes = dict(FACE_TANK)

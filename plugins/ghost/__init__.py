@@ -40,7 +40,7 @@ Run summary: ``ghosts_last`` (ghosts of the last force evaluation), ``ghosts_max
 
 from __future__ import annotations
 
-from sphcore.api import CaseError, Fields, Option, hookimpl
+from sphcore.api import CaseError, Fields, Option, hookimpl, plane_groups
 
 from .images import MirrorImages, inverse_tait
 from .mirror import MAX_PLANES, TAIT_BASE_MIN
@@ -57,8 +57,9 @@ class GhostPlugin:
 
     def __init__(self):
         self.mirror: MirrorImages | None = None
-        # the moving tank's group (sphcore.geometry.motion.MovingGroup), None: fixed planes
-        self.tank = None
+        # the groups that move planes (sphcore.geometry.motion.MovingGroup): the tank, pistons
+        self.groups = ()
+        self.tank = None  # the group holding every plane, if one does
 
     @hookimpl
     def sph_options(self):
@@ -97,7 +98,9 @@ class GhostPlugin:
             raise CaseError(file, "plugins.use", "the ghost plugin acts through SPH forces; physics.sph is false")
         self.mirror = MirrorImages(planes.normals, planes.offsets, free_slip=cfg["wall"] == "free_slip",
                                    hydrostatic=cfg["hydrostatic"])
-        self.tank = next((g for g in getattr(case, "moving", ()) if g.planes), None)
+        self.groups = plane_groups(getattr(case, "moving", ()))
+        # one group holds every plane (a tank): the images' force is all the walls' (the load)
+        self.tank = self.groups[0] if len(self.groups) == 1 and len(self.groups[0].planes) == planes.count else None
 
     @hookimpl
     def sph_moving_walls(self):
@@ -111,13 +114,14 @@ class GhostPlugin:
         st = ctx.state
         # the pressure the momentum equation uses: with modified pressure, its dynamic part
         fluid = Fields(st.pos, st.vel, st.rho, ctx.force_pressure, st.m)
-        if self.tank is None:
+        if not self.groups:
             src = self.mirror.generate(fluid, st.kind, ctx.params)
         else:
             t = ctx.t
             planes = ctx.planes_at(t)
+            motion = WallMotion.of_planes(planes.count, [(g.planes, g.motion.pose(t)) for g in self.groups])
             src = self.mirror.generate(fluid, st.kind, ctx.params, walls=PlaneGroup(planes.normals, planes.offsets),
-                                       motion=WallMotion.of(self.tank.motion.pose(t)))
+                                       motion=motion)
         stats = ctx.stats(self)  # in the summary and the checkpoint: cumulative across restarts
         stats["ghosts_max"] = max(stats.get("ghosts_max", 0), src.n)
         stats["ghosts_last"] = src.n

@@ -61,7 +61,7 @@ class MirrorImages:
         or the run's :class:`sphcore.api.Params` (support, gravity, rho0, c0, gamma,
         p_background, rho_ref). Walls that move: ``walls``, a :class:`PlaneGroup` of the
         planes where they are now (the same planes in the same order as at construction),
-        and ``motion``, their :class:`WallMotion` now; without ``motion`` the images are
+        and ``motion``, their :class:`WallMotion` now (a row per plane); without ``motion`` the images are
         those of fixed walls (the fixed-wall kernels). The arrays returned are views of
         this object's buffers, valid until the next call (the core copies them into its
         source arrays).
@@ -70,6 +70,9 @@ class MirrorImages:
         if walls.normals.shape != self.walls.normals.shape:
             raise ValueError(f"expected {self.walls.normals.shape[0]} planes in {self.dim}D, got normals of shape "
                              f"{walls.normals.shape}")
+        if motion is not None and any(v.shape != (walls.normals.shape[0], 3) for v in motion):
+            raise ValueError(f"expected a WallMotion row (3 components) for each of the {walls.normals.shape[0]} "
+                             "planes")
         n = fluid.pos.shape[0]
         if self._passes.counts.shape[0] != n:
             self._passes = Passes(np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n + 1, np.int64))

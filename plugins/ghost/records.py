@@ -25,11 +25,12 @@ class PlaneGroup(NamedTuple):
 
 
 class WallMotion(NamedTuple):
-    """The rigid motion of the wall planes at one instant (all (3,) float64, zero-padded
-    in 2D): the point of the walls now at x moves with v_w = ``velocity`` + ``omega`` x r
-    and accelerates with a_w = ``acceleration`` + ``alpha`` x r + ``omega`` x (``omega`` x
-    r), r = x - ``origin`` (m/s, rad/s, m/s^2, rad/s^2; the origin is the centre of
-    rotation where it is now, c + D of :class:`sphcore.geometry.motion.Pose`).
+    """The rigid motion of each wall plane at one instant (all (k, 3) float64, a row per
+    plane, zero-padded in 2D): the point of plane k now at x moves with v_w =
+    ``velocity[k]`` + ``omega[k]`` x r and accelerates with a_w = ``acceleration[k]`` +
+    ``alpha[k]`` x r + ``omega[k]`` x (``omega[k]`` x r), r = x - ``origin[k]`` (m/s, rad/s,
+    m/s^2, rad/s^2; the origin is the centre of rotation where it is now, c + D of
+    :class:`sphcore.geometry.motion.Pose`). A fixed plane has rows of zeros.
     """
 
     origin: np.ndarray
@@ -39,16 +40,21 @@ class WallMotion(NamedTuple):
     alpha: np.ndarray
 
     @classmethod
-    def of(cls, pose) -> WallMotion:
-        """The motion of the walls at a :class:`sphcore.geometry.motion.Pose`."""
-        def pad(v):
-            out = np.zeros(3)
-            v = np.asarray(v, dtype=np.float64).ravel()
-            out[: v.size] = v
-            return out
+    def of(cls, pose, count: int) -> WallMotion:
+        """``count`` planes that all move at a :class:`sphcore.geometry.motion.Pose`."""
+        return cls.of_planes(count, [(np.arange(count), pose)])
 
-        return cls(pad(np.asarray(pose.centre) + np.asarray(pose.shift)), pad(pose.velocity), pad(pose.omega),
-                   pad(pose.acceleration), pad(pose.alpha))
+    @classmethod
+    def of_planes(cls, count: int, poses) -> WallMotion:
+        """``count`` planes, those of each (plane indices, pose) of ``poses`` at that pose
+        and the others at rest."""
+        rows = [np.zeros((count, 3)) for _ in range(5)]
+        for index, pose in poses:
+            for row, v in zip(rows, (np.asarray(pose.centre) + np.asarray(pose.shift), pose.velocity, pose.omega,
+                                     pose.acceleration, pose.alpha)):
+                v = np.asarray(v, dtype=np.float64).ravel()
+                row[index, : v.size] = v
+        return cls(*rows)
 
 
 class MirrorRule(NamedTuple):

@@ -2,8 +2,8 @@
 each group of walls that move together.
 
 The case's walls fall into groups (:attr:`sphcore.case.model.Case.moving`): the fixed walls,
-the tank when it moves (its planes and the walls with ``tank = true``), and each wall with
-a motion of its own. A group's geometry is kept where case.toml draws it (its reference
+the tank when it moves (its planes and the walls with ``tank = true``), and each plane or
+wall with a motion of its own (a piston). A group's geometry is kept where case.toml draws it (its reference
 frame), with its face grid built once. For a step from t to t + dt a moving group at poses
 P0 = P(t) and P1 = P(t + dt) (:mod:`sphcore.geometry.motion`) sees each particle
 
@@ -87,18 +87,22 @@ def groups_of(case, normals, offsets):
     nf = faces.count if faces is not None else 0
     moving = getattr(case, "moving", ())
     fixed_faces = np.ones(nf, bool)
-    tank_moves = False
+    fixed_planes = np.ones(normals.shape[0], bool)
     out = []
     for g in moving:
         fixed_faces[g.faces] = False
-        tank_moves |= g.planes
-    none = (np.zeros((0, dim)), np.zeros(0))
-    fixed_planes = none if tank_moves else (normals, offsets)
-    if fixed_planes[0].shape[0] or fixed_faces.any():
-        out.append(Group("fixed", *fixed_planes, select(faces, np.flatnonzero(fixed_faces)), None))
+        fixed_planes[g.planes] = False
+
+    def planes(index):
+        if len(index) == normals.shape[0]:  # all of them (the arrays as they are)
+            return normals, offsets
+        return np.ascontiguousarray(normals[index]), np.ascontiguousarray(offsets[index])
+
+    if fixed_planes.any() or fixed_faces.any():
+        out.append(Group("fixed", *planes(np.flatnonzero(fixed_planes)), select(faces, np.flatnonzero(fixed_faces)),
+                         None))
     for g in moving:
-        planes = (normals, offsets) if g.planes else none
-        out.append(Group(g.name, *planes, select(faces, g.faces), g.motion))
+        out.append(Group(g.name, *planes(np.asarray(g.planes, np.int64)), select(faces, g.faces), g.motion))
     return out
 
 

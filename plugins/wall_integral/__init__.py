@@ -96,7 +96,7 @@ class WallIntegralPlugin:
         # walls that move (sphcore.geometry.motion.MovingGroup): the tank's planes follow
         # ctx.planes; each group's faces get their own grid in the group's frame (.moving)
         groups = tuple(getattr(case, "moving", ()))
-        self.tank = next((g for g in groups if g.planes), None)
+        self.plane_groups = tuple(g for g in groups if len(g.planes))
         self.face_groups = tuple(g for g in groups if len(g.faces))
         self._fixed = None
         if self.walls is not None and self.face_groups:
@@ -132,7 +132,7 @@ class WallIntegralPlugin:
         if self._table is None:
             self._table = lattice_error_tables(prm.kernel_id, prm.h, prm.dx, dim, prm.moment_norm)
         normals, offsets = self.normals, self.offsets
-        if self.tank is not None:  # the tank's planes where they are now
+        if self.plane_groups:  # the planes where they are now
             planes = ctx.planes
             normals = np.ascontiguousarray(planes.normals, dtype=np.float64)
             offsets = np.ascontiguousarray(planes.offsets, dtype=np.float64)
@@ -143,8 +143,9 @@ class WallIntegralPlugin:
                                offsets, prm.kernel_id, prm.h, prm.gravity, *self._table, prm.support,
                                prm.moment_norm, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
         loads = {}
-        if self.tank is not None and count:
-            loads[self.tank.name] = self._tank_terms(ctx, terms, count, normals, offsets)
+        for g in self.plane_groups:
+            if count:
+                loads[g.name] = self._plane_group_terms(ctx, terms, count, g, normals, offsets)
         if self.walls is not None:
             if self._fixed is None or len(self._fixed):
                 self._add_face_terms(ctx, terms)
@@ -153,7 +154,7 @@ class WallIntegralPlugin:
                 if g.name in loads:  # the tank's walls: its planes and faces together
                     force, moment = force + loads[g.name][0], moment + loads[g.name][1]
                 loads[g.name] = (force, moment)
-        if self.tank is not None or self.face_groups:  # kept for the next step's load (restart too)
+        if self.plane_groups or self.face_groups:  # kept for the next step's load (restart too)
             ctx.kept(self)["loads"] = {name: [float(v) for v in f] + [float(v) for v in m]
                                        for name, (f, m) in loads.items()}
         ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(terms.share))
@@ -162,7 +163,7 @@ class WallIntegralPlugin:
     def sph_after_integrate(self, ctx, pos0, pos, vel, acc, dt):
         """The step's load on each moving group: the wall pressure force and moment of the
         evaluation the step started from, times dt (:mod:`.moving`)."""
-        if self.tank is None and not self.face_groups:
+        if not self.plane_groups and not self.face_groups:
             return
         dim = ctx.params.dim
         for name, row in ctx.kept(self).get("loads", {}).items():
@@ -182,15 +183,20 @@ class WallIntegralPlugin:
         g[:prm.dim] = np.asarray(prm.gravity, np.float64)[:prm.dim]
         return g
 
-    def _tank_terms(self, ctx, terms, count, normals, offsets):
-        from .moving import empty_load, load_of, pose_arrays, tank_terms
+    def _plane_group_terms(self, ctx, terms, count, group, normals, offsets):
+        """A moving group's planes (:func:`.moving.plane_group_terms`)."""
+        from .moving import empty_load, load_of, plane_group_terms, pose_arrays
 
         st, prm = ctx.state, ctx.params
-        rot, centre, origin, vel, acc, omega, alpha = pose_arrays(self.tank.motion.pose(ctx.t), prm.dim)
+        rot, centre, origin, vel, acc, omega, alpha = pose_arrays(group.motion.pose(ctx.t), prm.dim)
+        member = np.zeros(normals.shape[0], np.bool_)
+        member[group.planes] = True
+        own_normals = np.ascontiguousarray(normals[group.planes])
+        own_offsets = np.ascontiguousarray(offsets[group.planes])
         load = empty_load()
-        tank_terms(self._near, count, st.pos, normals, offsets, prm.kernel_id, prm.h, origin, vel, acc, omega,
-                   alpha, self._gravity3(prm), *self._load_coefs(ctx), terms.share, terms.grad, terms.hydro,
-                   terms.flux, terms.accel, load)
+        plane_group_terms(self._near, count, st.pos, normals, offsets, member, own_normals, own_offsets, prm.support,
+                          prm.kernel_id, prm.h, origin, vel, acc, omega, alpha, self._gravity3(prm),
+                          *self._load_coefs(ctx), terms.share, terms.grad, terms.hydro, terms.flux, terms.accel, load)
         return load_of(load, prm.dim)
 
     def _moving_face_terms(self, ctx, terms, k, group):

@@ -4,10 +4,10 @@ A moving group (:class:`sphcore.geometry.motion.MovingGroup`: the tank's planes,
 faces) is a rigid body with the pose x = c + D + R (X - c) (:class:`sphcore.geometry.motion.Pose`).
 Its wall integrals are those of fixed walls evaluated where the walls are:
 
-- the tank's planes are moved as a whole (``ctx.planes`` at the run's time); share,
-  gradient, moment, lattice correction and projector are those of the fixed planes at that
-  place (``planes.py``), the lattice tables included (a rigid motion keeps the walls'
-  distances and angles);
+- planes are taken where they are (``ctx.planes`` at the run's time: the tank's moved as a
+  whole, a piston's on its own); share, gradient, moment, lattice correction and projector
+  are those of fixed planes at that place (``planes.py``), the lattice tables included (a
+  tank's rigid motion keeps the walls' distances and angles);
 - finite faces keep their reference vertices and face grid: each particle is taken into
   the group's frame, X = c + R^T (x - c - D), the terms are computed there with gravity
   in that frame, R^T g, and s, G, T g and the projector's directions are turned back
@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
+
+from sphcore.api import plane_distance
 
 from .facewalls import add_terms, point_terms
 from .normals import set_projector
@@ -83,16 +85,98 @@ def _add_load(load, b, dim, x0, x1, x2, origin, cp, ch, G0, G1, G2, A0, A1, A2):
     load[b, 5] += r0 * f1 - r1 * f0
 
 
+@njit(cache=True, inline="always")
+def _group_part(x0, x1, x2, dim, normals, offsets, member, support, g0, g1, g2):
+    """The part of the wall gradient G = (g0, g1, g2) that belongs to the planes with
+    member[a]: G written in the normals of the planes within ``support`` of x,
+    G = sum_a c_a n_a (G lies in their span), and the members' terms summed. Every near
+    plane a member: G itself. Normals not independent (more than dim near planes, or
+    parallel ones): all of G to the group of the nearest plane."""
+    near = np.empty(3, np.int64)
+    m = 0
+    all_in = True
+    some_in = False
+    nearest = -1
+    dmin = np.inf
+    for a in range(normals.shape[0]):
+        d = plane_distance(normals, offsets, a, x0, x1, x2)
+        if d < support:
+            if d < dmin:
+                dmin, nearest = d, a
+            if m < 3:
+                near[m] = a
+            m += 1
+            all_in = all_in and member[a]
+            some_in = some_in or member[a]
+    if not some_in:
+        return 0.0, 0.0, 0.0
+    if all_in:
+        return g0, g1, g2
+    if m <= dim:
+        # Gram system M c = N G for the near normals (m <= 3)
+        M = np.zeros((3, 3))
+        r = np.zeros(3)
+        for u in range(m):
+            a = near[u]
+            r[u] = normals[a, 0] * g0 + normals[a, 1] * g1 + (normals[a, 2] * g2 if dim == 3 else 0.0)
+            for w in range(m):
+                b = near[w]
+                acc_ = 0.0
+                for e in range(dim):
+                    acc_ += normals[a, e] * normals[b, e]
+                M[u, w] = acc_
+        for u in range(m, 3):
+            M[u, u] = 1.0
+        det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1]) - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
+               + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
+        if det > 1e-9:
+            c = np.empty(3)
+            for u in range(3):  # Cramer's rule: column u of M replaced by r
+                c[u] = _det_with(M, r, u) / det
+            p0 = 0.0
+            p1 = 0.0
+            p2 = 0.0
+            for u in range(m):
+                a = near[u]
+                if member[a]:
+                    p0 += c[u] * normals[a, 0]
+                    p1 += c[u] * normals[a, 1]
+                    if dim == 3:
+                        p2 += c[u] * normals[a, 2]
+            return p0, p1, p2
+    if member[nearest]:
+        return g0, g1, g2
+    return 0.0, 0.0, 0.0
+
+
+@njit(cache=True, inline="always")
+def _det_with(M, r, col):
+    """det of the 3 x 3 M with column ``col`` replaced by r."""
+    a = np.empty((3, 3))
+    for u in range(3):
+        for w in range(3):
+            a[u, w] = r[u] if w == col else M[u, w]
+    return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+            + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+
+
 @njit(cache=True, parallel=True)
-def tank_terms(idx, count, pos, normals, offsets, kernel_id, h, origin, vel, acc, omega, alpha, gravity, coef_p,
-               coef_h, share, grad, hydro, flux, accel, load):
-    """The moving tank's terms for the particles idx[:count] near its planes (``normals``,
-    ``offsets`` where the planes are now), after the planes' own terms are in ``grad``
-    (every plane belongs to the tank, so share, grad and hydro hold the tank's s, G_w and
-    T g there): flux += v_w . G_w, accel += T (-a_w) + s (-a_w); load (LOAD_ROWS, 6) +=
-    force and moment about ``origin`` of coef_p G_w + coef_h (T g + s g + accel) (coef_p =
-    2 m p / rho, coef_h = m lambda (rho - rho_ref) / rho). vel, acc, omega, alpha, gravity:
-    3-vectors (module docstring)."""
+def plane_group_terms(idx, count, pos, normals, offsets, member, own_normals, own_offsets, support, kernel_id, h,
+                      origin, vel, acc, omega, alpha, gravity, coef_p, coef_h, share, grad, hydro, flux, accel, load):
+    """A moving group's planes (member[a]: plane a of ``normals``, ``offsets`` is the
+    group's; ``own_normals``, ``own_offsets``: those planes alone; all where they are now)
+    for the particles idx[:count] near some plane, after the planes' own terms are in
+    share, grad and hydro.
+
+    The group's part of the wall gradient, G_k, is G_w written in the near planes' normals
+    with the group's terms kept (:func:`_group_part`: G_w itself where every near plane is
+    the group's, so that a tank carried at constant velocity sees 2 rho (v - v_w) . G_w
+    with the lattice-corrected G_w of continuity; a piston's share where it meets a fixed
+    floor). flux += v_w . G_k, accel += T_k (-a_w) + s_k (-a_w) of the group's planes alone;
+    load (LOAD_ROWS, 6) += force and moment about ``origin`` of coef_p G_k + coef_h (T_k g
+    + s_k g + accel_k) (coef_p = 2 m p / rho, coef_h = m lambda (rho - rho_ref) / rho), with
+    share and hydro (lattice correction included) where the group holds every near plane.
+    vel, acc, omega, alpha, gravity: 3-vectors (module docstring)."""
     dim = pos.shape[1]
     rows = load.shape[0]
     for b in prange(rows):
@@ -100,11 +184,13 @@ def tank_terms(idx, count, pos, normals, offsets, kernel_id, h, origin, vel, acc
             i = idx[t]
             x0, x1 = pos[i, 0], pos[i, 1]
             x2 = pos[i, 2] if dim == 3 else 0.0
+            G2 = grad[i, 2] if dim == 3 else 0.0
+            k0, k1, k2 = _group_part(x0, x1, x2, dim, normals, offsets, member, support, grad[i, 0], grad[i, 1], G2)
+            if k0 == 0.0 and k1 == 0.0 and k2 == 0.0:
+                continue
             v0, v1, v2, a0, a1, a2 = _rigid(x0, x1, x2, dim, origin, vel, acc, omega, alpha)
-            g0, g1 = grad[i, 0], grad[i, 1]
-            g2 = grad[i, 2] if dim == 3 else 0.0
-            flux[i] += v0 * g0 + v1 * g1 + v2 * g2
-            s, _, _, _, t0, t1, t2 = wall_point(x0, x1, x2, normals, offsets, kernel_id, h, -a0, -a1, -a2)
+            flux[i] += v0 * k0 + v1 * k1 + v2 * k2
+            s, _, _, _, t0, t1, t2 = wall_point(x0, x1, x2, own_normals, own_offsets, kernel_id, h, -a0, -a1, -a2)
             m0 = t0 - s * a0
             m1 = t1 - s * a1
             m2 = t2 - s * a2 if dim == 3 else 0.0
@@ -112,11 +198,15 @@ def tank_terms(idx, count, pos, normals, offsets, kernel_id, h, origin, vel, acc
             accel[i, 1] += m1
             if dim == 3:
                 accel[i, 2] += m2
-            s_i = share[i]
-            h2 = hydro[i, 2] if dim == 3 else 0.0
-            _add_load(load, b, dim, x0, x1, x2, origin, coef_p[i], coef_h[i], g0, g1, g2,
-                      hydro[i, 0] + s_i * gravity[0] + m0, hydro[i, 1] + s_i * gravity[1] + m1,
-                      h2 + s_i * gravity[2] + m2)
+            if k0 == grad[i, 0] and k1 == grad[i, 1] and k2 == G2:  # every near plane the group's
+                s_k = share[i]
+                h0, h1 = hydro[i, 0], hydro[i, 1]
+                h2 = hydro[i, 2] if dim == 3 else 0.0
+            else:
+                s_k, _, _, _, h0, h1, h2 = wall_point(x0, x1, x2, own_normals, own_offsets, kernel_id, h,
+                                                      gravity[0], gravity[1], gravity[2])
+            _add_load(load, b, dim, x0, x1, x2, origin, coef_p[i], coef_h[i], k0, k1, k2,
+                      h0 + s_k * gravity[0] + m0, h1 + s_k * gravity[1] + m1, h2 + s_k * gravity[2] + m2)
 
 
 @njit(cache=True, parallel=True)
@@ -127,7 +217,7 @@ def moving_face_terms(pos, rot, centre, origin, vel, acc, omega, alpha, verts, g
     particle within 2h of them: s, R G, R T g (T computed with R^T g, ``gravity`` given in
     the group's frame), fill, the projector (its directions turned back with R), flux and
     accel (module docstring); load (stamps.shape[0], 6) += each block's force and moment
-    (:func:`tank_terms`; ``world_gravity`` g as a 3-vector).
+    (:func:`plane_group_terms`; ``world_gravity`` g as a 3-vector).
     ``rot`` R (dim, dim), ``centre`` c (dim,), ``origin`` c + D (3,). ``stamps`` marks as in
     :func:`.facewalls.face_wall_terms`, two marks per particle: ``epoch`` and epoch + 1 must
     differ from every earlier call's."""

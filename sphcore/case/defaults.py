@@ -20,8 +20,9 @@ CORE: dict[str, dict[str, O]] = {
         "planes": O([], "table_list", doc="extra wall planes: {normal = [...], point = [...]}; the normal points into the fluid"),
         "walls": O([], "table_list", doc="finite walls: boxes, polygons, polylines and mesh files (keys: WALL); "
                    "obstacles inside the planes' region, or a closed tank of their own"),
-        "motion": O([], "table_list", doc="prescribed motion of the tank (every plane, and the walls with tank = "
-                    "true): parts that add up (keys: sphcore.case.motion.PART); none: the tank is fixed"),
+        "motion": O([], "table_list", doc="prescribed motion of the tank (every plane without a motion of its own, "
+                    "and the walls with tank = true): parts that add up (keys: sphcore.case.motion.PART); none: the "
+                    "tank is fixed"),
     },
     # [[blocks]] is an array of tables; each entry is checked against BLOCK below.
     "blocks": O([], "table_list", doc="particle blocks filled on a lattice of spacing dx"),
@@ -162,5 +163,7 @@ WALL: dict[str, O] = {
 PLANE: dict[str, O] = {
     "normal": O(None, "vector", doc="normal pointing into the domain (normalised on load)", nullable=True),
     "point": O(None, "vector", "m", "a point on the plane", nullable=True),
+    "motion": O([], "table_list", doc="prescribed motion of this plane alone (a piston wave maker): parts that "
+                "add up (keys: sphcore.case.motion.PART); none: the plane is the tank's"),
 }
 

@@ -262,27 +262,41 @@ def _moving_groups(file, cfg, dim, ranges, faces, planes) -> tuple[MovingGroup, 
     t_end, case_dir, walls = cfg["time"]["t_end"], Path(file).parent, cfg["domain"]["walls"]
     groups = []
 
-    def reach(motion, with_planes, face_index):
+    def reach(motion, plane_index, face_index):
         """The group's largest distance from its centre of rotation (inf: unbounded planes)."""
         centre = motion.pose(0.0).centre
         points = [faces.verts[face_index].reshape(-1, dim)] if len(face_index) else []
-        if with_planes:
-            box = outline(planes)
-            if box is None:
+        if len(plane_index):
+            box = outline(planes) if len(plane_index) == planes.count else None
+            if box is None:  # some of the planes alone bound no region
                 return math.inf
             points.append(box.reshape(-1, dim))
         return float(np.sqrt(((np.concatenate(points) - centre) ** 2).sum(axis=1).max())) if points else 0.0
 
+    none = np.zeros(0, np.int64)
+    # planes of their own motion ([[domain.planes]] entries come after the box's 2 dim planes)
+    first = 2 * dim if cfg["domain"]["min"] is not None else 0
+    own = []
+    for k, entry in enumerate(cfg["domain"]["planes"]):
+        key = f"domain.planes[{k}].motion"
+        m = parse_motion(file, key, entry.get("motion", []), dim, case_dir, t_end)
+        if m is not None:
+            own.append(MovingGroup(key, m, np.array([first + k], np.int64), none, math.inf))
     tank = parse_motion(file, "domain.motion", cfg["domain"]["motion"], dim, case_dir, t_end)
     if tank is not None:
         idx = [np.arange(*ranges[k]) for k, w in enumerate(walls) if w.get("tank", False)]
-        idx = np.concatenate(idx).astype(np.int64) if idx else np.zeros(0, np.int64)
-        groups.append(MovingGroup("domain.motion", tank, True, idx, reach(tank, True, idx)))
+        idx = np.concatenate(idx).astype(np.int64) if idx else none
+        taken = np.zeros(planes.count, bool)
+        for g in own:
+            taken[g.planes] = True
+        carried = np.flatnonzero(~taken).astype(np.int64)
+        groups.append(MovingGroup("domain.motion", tank, carried, idx, reach(tank, carried, idx)))
+    groups += own
     for k, w in enumerate(walls):
         m = parse_motion(file, f"domain.walls[{k}].motion", w.get("motion", []), dim, case_dir, t_end)
         if m is not None:
             idx = np.arange(*ranges[k], dtype=np.int64)
-            groups.append(MovingGroup(f"domain.walls[{k}].motion", m, False, idx, reach(m, False, idx)))
+            groups.append(MovingGroup(f"domain.walls[{k}].motion", m, none, idx, reach(m, none, idx)))
     return tuple(groups)
 
 

@@ -297,13 +297,14 @@ class Motion:
 
 @dataclass(frozen=True)
 class MovingGroup:
-    """Walls that move together: the case's planes (``planes``: the tank's) and the finite
-    faces ``faces`` (indices into the case's faces), with their ``motion``; ``name`` is
-    where case.toml gives the motion (``domain.motion`` or ``domain.walls[k].motion``)."""
+    """Walls that move together: the planes ``planes`` and the finite faces ``faces``
+    (indices into the case's planes and faces), with their ``motion``; ``name`` is where
+    case.toml gives the motion (``domain.motion``: the tank, every plane without a motion of
+    its own; ``domain.planes[k].motion``: one plane, a piston; ``domain.walls[k].motion``)."""
 
     name: str
     motion: Motion
-    planes: bool
+    planes: np.ndarray
     faces: np.ndarray
     #: the largest distance (m) of a point of the group's walls from its centre of rotation
     #: (inf: unbounded planes); |Omega| reach bounds the rotation's share of the walls' speed
@@ -314,6 +315,27 @@ def moved_planes(planes, pose: Pose):
     """The planes (:class:`sphcore.geometry.planes.Planes`) of a moving tank at ``pose``."""
     return type(planes)(np.ascontiguousarray(pose.direction_to_world(planes.normals)),
                         np.ascontiguousarray(pose.to_world(planes.points)))
+
+
+def planes_at(planes, groups, t: float):
+    """The case's ``planes`` at time t: each moving group's planes (``groups``:
+    :class:`MovingGroup`) at its pose, the others where case.toml draws them."""
+    moving = [g for g in groups if len(g.planes)]
+    if not moving:
+        return planes
+    if len(moving) == 1 and len(moving[0].planes) == planes.count:  # the tank, all its planes
+        return moved_planes(planes, moving[0].motion.pose(t))
+    normals, points = planes.normals.copy(), planes.points.copy()
+    for g in moving:
+        pose = g.motion.pose(t)
+        normals[g.planes] = pose.direction_to_world(planes.normals[g.planes])
+        points[g.planes] = pose.to_world(planes.points[g.planes])
+    return type(planes)(np.ascontiguousarray(normals), np.ascontiguousarray(points))
+
+
+def plane_groups(groups):
+    """The groups that move planes."""
+    return tuple(g for g in groups if len(g.planes))
 
 
 def wall_speed(groups, t: float, pos: np.ndarray) -> float:

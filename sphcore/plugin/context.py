@@ -54,7 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore.geometry.motion import moved_planes
+from sphcore.geometry.motion import plane_groups, planes_at
 
 
 class RunContext:
@@ -71,8 +71,8 @@ class RunContext:
         self.case = case
         self.params = params
         self.run = run
-        # the group that moves the planes (the tank), if any; its planes at one time, cached
-        self._tank = next((g for g in getattr(case, "moving", ()) if g.planes), None)
+        # the groups that move planes (the tank, pistons); the planes at one time, cached
+        self._plane_groups = plane_groups(getattr(case, "moving", ()))
         self._planes_at = (None, case.planes)
         self.output_dir = output_dir
         self.restarting = restarting
@@ -96,11 +96,12 @@ class RunContext:
         return self.planes_at(self.t)
 
     def planes_at(self, t: float):
-        """The case's wall planes at time t (s): those of case.toml unless the tank moves."""
-        if self._tank is None:
+        """The case's wall planes at time t (s): those of case.toml unless some move (the tank,
+        a piston: :func:`sphcore.geometry.motion.planes_at`)."""
+        if not self._plane_groups:
             return self.case.planes
         if self._planes_at[0] != t:
-            self._planes_at = (t, moved_planes(self.case.planes, self._tank.motion.pose(t)))
+            self._planes_at = (t, planes_at(self.case.planes, self._plane_groups, t))
         return self._planes_at[1]
 
     @property
