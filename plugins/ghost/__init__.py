@@ -30,9 +30,11 @@ the wall, the hydrostatic correction with g - a_w after Adami, Hu & Adams 2012, 
 A case with finite wall faces is refused, moving or not (the plugin mirrors across planes
 only). A force evaluation sees the planes at ``ctx.t``, the time the particles are at
 (the core advances its clock before the leapfrog's end-of-step rates). A case whose walls
-do not move takes the fixed-wall path unchanged. The moving tank's load (force and moment
-of the fluid on it, for the ``wall_loads`` writer) is the images' force on the fluid,
-reversed (``sph_after_integrate``).
+do not move takes the fixed-wall path unchanged. The moving walls' load (force and moment
+of the fluid on them, for the ``wall_loads`` writer): a tank's is the images' force on the
+fluid, reversed, from the fluid's momentum balance (``sph_after_integrate``); with planes
+in several groups (a piston) each group's is summed from its images' pair forces
+(:mod:`.loads`).
 
 Run summary: ``ghosts_last`` (ghosts of the last force evaluation), ``ghosts_max``,
 ``ghost_reallocations`` (buffer growths).
@@ -122,6 +124,8 @@ class GhostPlugin:
             motion = WallMotion.of_planes(planes.count, [(g.planes, g.motion.pose(t)) for g in self.groups])
             src = self.mirror.generate(fluid, st.kind, ctx.params, walls=PlaneGroup(planes.normals, planes.offsets),
                                        motion=motion)
+            if self.tank is None:  # several groups: each one's load from the images' pair forces
+                self._pair_loads(ctx, fluid, src, planes, t)
         stats = ctx.stats(self)  # in the summary and the checkpoint: cumulative across restarts
         stats["ghosts_max"] = max(stats.get("ghosts_max", 0), src.n)
         stats["ghosts_last"] = src.n
@@ -139,9 +143,15 @@ class GhostPlugin:
         it is; both times dt go to ``ctx.add_wall_load``. With the kernel gradient correction
         the pair forces are not antisymmetric and the load carries that scheme's momentum
         error too."""
-        if self.tank is None or acc is None:
+        if not self.groups or acc is None:
             return
         import numpy as np
+
+        if self.tank is None:  # several groups: the loads of the evaluation the step started from
+            dim = ctx.params.dim
+            for name, row in ctx.kept(self).get("loads", {}).items():
+                ctx.add_wall_load(name, np.asarray(row[:dim]) * dt, np.asarray(row[dim:]) * dt)
+            return
 
         st, prm = ctx.state, ctx.params
         dim = prm.dim
@@ -155,6 +165,28 @@ class GhostPlugin:
         else:
             moment = np.cross(r, f).sum(axis=0)
         ctx.add_wall_load(self.tank.name, f.sum(axis=0) * dt, moment * dt)
+
+    def _pair_loads(self, ctx, fluid, src, planes, t):
+        """Each plane group's load from the images' pair forces (:mod:`.loads`), kept for the
+        step (and across a restart)."""
+        import numpy as np
+
+        from .loads import group_loads
+
+        prm = ctx.params
+        owner = np.full(planes.count, -1, np.int64)
+        origins = np.zeros((len(self.groups), 3))
+        for k, g in enumerate(self.groups):
+            owner[g.planes] = k
+            pose = g.motion.pose(t)
+            origins[k, :prm.dim] = pose.centre + pose.shift
+        out = np.zeros((len(self.groups), 6))
+        group_loads(fluid.pos, fluid.rho, fluid.p, fluid.m, src.pos, src.rho, src.p, src.m,
+                    np.ascontiguousarray(planes.normals), np.ascontiguousarray(planes.offsets), owner, origins,
+                    prm.kernel_id, prm.h, out)
+        moment = slice(3, 6) if prm.dim == 3 else slice(5, 6)
+        ctx.kept(self)["loads"] = {g.name: [float(v) for v in out[k, :prm.dim]] + [float(v) for v in out[k, moment]]
+                                   for k, g in enumerate(self.groups)}
 
     @hookimpl
     def sph_summary(self, ctx):

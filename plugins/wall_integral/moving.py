@@ -176,6 +176,10 @@ def plane_group_terms(idx, count, pos, normals, offsets, member, own_normals, ow
     load (LOAD_ROWS, 6) += force and moment about ``origin`` of coef_p G_k + coef_h (T_k g
     + s_k g + accel_k) (coef_p = 2 m p / rho, coef_h = m lambda (rho - rho_ref) / rho), with
     share and hydro (lattice correction included) where the group holds every near plane.
+    A group of one plane among others (a piston) takes the first moment's part along its
+    normal only: the part along the wall holds the fluid next to it up (the mirror fluid's
+    weight), which a free-slip plane does not carry; a tank carries it all, so that its load
+    is the model's whole reaction.
     vel, acc, omega, alpha, gravity: 3-vectors (module docstring)."""
     dim = pos.shape[1]
     rows = load.shape[0]
@@ -205,8 +209,17 @@ def plane_group_terms(idx, count, pos, normals, offsets, member, own_normals, ow
             else:
                 s_k, _, _, _, h0, h1, h2 = wall_point(x0, x1, x2, own_normals, own_offsets, kernel_id, h,
                                                       gravity[0], gravity[1], gravity[2])
-            _add_load(load, b, dim, x0, x1, x2, origin, coef_p[i], coef_h[i], k0, k1, k2,
-                      h0 + s_k * gravity[0] + m0, h1 + s_k * gravity[1] + m1, h2 + s_k * gravity[2] + m2)
+            A0 = h0 + s_k * gravity[0] + m0
+            A1 = h1 + s_k * gravity[1] + m1
+            A2 = h2 + s_k * gravity[2] + m2
+            if own_normals.shape[0] == 1 and normals.shape[0] > 1:  # a plane of its own: the normal part
+                nn = A0 * own_normals[0, 0] + A1 * own_normals[0, 1]
+                if dim == 3:
+                    nn += A2 * own_normals[0, 2]
+                A0 = nn * own_normals[0, 0]
+                A1 = nn * own_normals[0, 1]
+                A2 = nn * own_normals[0, 2] if dim == 3 else 0.0
+            _add_load(load, b, dim, x0, x1, x2, origin, coef_p[i], coef_h[i], k0, k1, k2, A0, A1, A2)
 
 
 @njit(cache=True, parallel=True)
