@@ -10,15 +10,18 @@ Each batch draws one scene and one step:
 - ``paddle``: a closed box of faces (a paddle through the floor) swinging up to 0.15 m
   and turning up to +-15 deg inside a fixed 2D tank of planes, never closer than 0.1 m to
   its sides; the particles start in the water
-  (inside the tank, outside the paddle).
+  (inside the tank, outside the paddle);
+- ``piston``: one plane of a unit box (2D or 3D) moving on its own, swaying up to 0.15 m
+  and turning up to +-15 deg about a hinge below the floor (piston and flap wave makers),
+  the other planes fixed; the particles start between them.
 
 Velocities are drawn so that the walls move up to ten times faster than the particles (and
 as slow as a tenth), accelerations up to 30 m/s^2, the step up to the CFL limit of a
 0.01 m particle spacing with c0 = 20 m/s (dt <= 1.5e-4 s) or, one batch in four, up to 100
 times longer; CR anywhere in [0, 1]. After :func:`sphcore_plugins.reflective.moving.reflect_moving`
 every particle is checked against the walls where they are at t + dt: clearance to every
-plane of the tank and to the paddle's faces at least the radius (less 1e-9 of it), and on
-the fluid side of the paddle. An escape exits 1 and prints the scene.
+plane and to the paddle's faces at least the radius (less 1e-9 of it), and on the fluid
+side of the paddle; a particle pinched between two groups counts as an escape. An escape exits 1 and prints the scene.
 """
 
 from __future__ import annotations
@@ -154,6 +157,48 @@ def paddle_batch(rng, n):
         f"paddle t={t:.4f} dt={dt:.3g} worst gap {gap.min():.3g} clearance {clear.min():.3g} pinched {pinched}"
 
 
+def piston_batch(rng, n):
+    """A wave maker that is a plane of the tank on its own: the x = 0 side of a unit box
+    (2D or 3D) sways along x up to 0.15 m and turns up to +-15 deg about a hinge line 0.1 m
+    below the floor (a piston, a flap, or both), the other sides fixed."""
+    dim = int(rng.choice([2, 3]))
+    normals, offsets = box_planes(dim)
+    hinge = np.zeros(dim)
+    hinge[1 if dim == 2 else dim - 1] = -0.1
+    m = motion(rng, dim, hinge, 15.0, 0.0)
+    sway = SineTranslation(np.eye(dim)[0], rng.uniform(0, 0.15), 2 * math.pi / rng.uniform(0.3, 3.0),
+                           rng.uniform(0, 2 * math.pi), m.translations[0].ramp)
+    axis = None
+    if dim == 3:  # the hinge runs along the floor, across the piston: y
+        axis = np.array([0.0, 1.0, 0.0])
+    m = Motion(dim, (sway,), m.rotation, hinge, axis)
+    piston = Group("piston", np.ascontiguousarray(normals[:1]), np.ascontiguousarray(offsets[:1]), None, m)
+    fixed = Group("fixed", np.ascontiguousarray(normals[1:]), np.ascontiguousarray(offsets[1:]), None, None)
+    groups = [fixed, piston]
+    for g in groups:
+        g.build_grid(R)
+    t = rng.uniform(0, 3)
+    pose = m.pose(t)
+    wall = np.linalg.norm(pose.velocity) + np.linalg.norm(pose.omega) * 1.5 + 0.1
+    step = draw_step(rng, wall)
+    reach = 1.0 * (wall + step[0]) * step[1]
+    # half near the fixed sides, half near the piston's face where it is at t
+    pos0 = near_walls(rng, n, dim, reach)
+    k = n // 2
+    body = rng.uniform(R, 1 - R, (k, dim))
+    body[:, 0] = R + rng.uniform(0, 1, k) * min(reach, 0.5)
+    pos0[:k] = pose.to_world(body)
+    fixed_clear = (pos0 @ fixed.normals.T - fixed.offsets).min(axis=1)
+    keep = (fixed_clear >= R * 1.001) & (piston.to_body(pos0, t)[:, 0] >= R * 1.001)
+    pos0 = np.ascontiguousarray(pos0[keep])
+    (guarded, hit, events, pinched), pos, dt = fire(groups, step, rng, len(pos0), dim, t, pos0)
+    gap = piston.to_body(pos, t + dt)[:, 0]
+    clear = (pos @ fixed.normals.T - fixed.offsets).min(axis=1)
+    bad = (gap < R * (1 - TOL) - 1e-15) | (clear < R * (1 - TOL) - 1e-15)
+    return int(bad.sum()) + pinched, hit, guarded, \
+        f"piston {dim}D t={t:.4f} dt={dt:.3g} worst gap {gap.min():.3g} clearance {clear.min():.3g} pinched {pinched}"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--n", type=int, default=10_000_000, help="trajectories in all")
@@ -166,7 +211,7 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     while done < args.n:
         n = min(args.batch, args.n - done)
-        bad, hit, guarded, scene = (tank_batch if batches % 2 == 0 else paddle_batch)(rng, n)
+        bad, hit, guarded, scene = (tank_batch, paddle_batch, piston_batch)[batches % 3](rng, n)
         batches += 1
         done += n
         escapes += bad
