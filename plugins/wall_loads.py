@@ -168,6 +168,9 @@ class WallLoadsWriter(ScheduledWriter):
         self.ds, self.path, self.row = ds, path, keep
         if keep:
             t_last = float(times[keep - 1])
+            # the next row's interval starts at the last row kept (a checkpoint taken before
+            # that row was written does not know it)
+            ctx.kept(self)["t_last"] = t_last
             self.schedule.resume(t_last, int(steps[keep - 1]) if steps[keep - 1] == ctx.step else None)
 
 

@@ -82,6 +82,34 @@ def test_sigkill_in_the_middle_of_a_moving_run_then_restart_is_bit_for_bit(tmp_p
             assert np.array_equal(x[name][:], y[name][:]), name
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("use", [["reflective", "wall_integral"], ["ghost", "reflective"]])
+def test_a_wall_model_or_ghost_run_with_moving_planes_restarts_bit_for_bit(tmp_path, use):
+    """The rolling tank with a piston plane of its own, with the wall model or ghosts and the
+    walls' loads written, killed (SIGKILL) at random moments and restarted: the particles
+    and the loads are those of the run that was never stopped (the loads of the evaluation
+    a step starts from are kept in the checkpoint)."""
+    piston = {"normal": [-1.0, 0.0], "point": [0.75, 0.0],
+              "motion": [{"type": "sine_translation", "axis": [1.0, 0.0], "amplitude": 0.05, "frequency": 3.0}]}
+    case_dir = _case(tmp_path, "case", {"time.t_end": 0.3, "output.checkpoint_every_dt": 0.02,
+                                        "domain.walls": None, "domain.planes": [piston],
+                                        "plugins.use": [*use, "wall_loads", "netcdf"], "wall_loads.every_dt": 0.01})
+    ref = tmp_path / "ref"
+    whole = runner.run(case_dir, output=ref, quiet=True)
+    assert whole["status"] == "completed"
+    out = tmp_path / "out"
+    hit = kill_and_restart(case_dir, out, kills=2, rng=random.Random(41), stepping_s=whole["wall_time_s"])
+    assert hit >= 1
+    (meta, final), (ref_meta, want) = checkpoint_by_id(out), checkpoint_by_id(ref)
+    assert meta["t"] == ref_meta["t"] and meta["step"] == ref_meta["step"]
+    for key in ("id", "pos", "vel", "rho", "p"):
+        assert np.array_equal(final[key], want[key]), key
+    with netCDF4.Dataset(ref / "wall_loads.nc") as x, netCDF4.Dataset(out / "wall_loads.nc") as y:
+        assert len(x["time"][:]) == 31  # t = 0, then every 0.01 s
+        for name in x.variables:  # the first row has no interval: NaN in both
+            assert np.array_equal(np.asarray(x[name][:]), np.asarray(y[name][:]), equal_nan=True), name
+
+
 def test_the_loads_on_a_carried_tank_balance_the_momentum_of_its_water(tmp_path):
     """Water released in a tank carried at 0.5 m/s, reflective walls: the only forces on
     the water are gravity and the walls', so the wall loads integrated over the run

@@ -160,8 +160,8 @@ class GhostPlugin:
         f = -(st.m[:, None] * (acc - scale[:, None] * g))  # on the tank, per particle
         pose = self.tank.motion.pose(ctx.t)  # the step's start, where acc was evaluated
         r = pos0 - (pose.centre + pose.shift)
-        if dim == 2:
-            moment = np.array([(r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0]).sum()])
+        if dim == 2:  # about z
+            moment = np.array([0.0, 0.0, (r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0]).sum()])
         else:
             moment = np.cross(r, f).sum(axis=0)
         ctx.add_wall_load(self.tank.name, f.sum(axis=0) * dt, moment * dt)
@@ -184,8 +184,7 @@ class GhostPlugin:
         group_loads(fluid.pos, fluid.rho, fluid.p, fluid.m, src.pos, src.rho, src.p, src.m,
                     np.ascontiguousarray(planes.normals), np.ascontiguousarray(planes.offsets), owner, origins,
                     prm.kernel_id, prm.h, out)
-        moment = slice(3, 6) if prm.dim == 3 else slice(5, 6)
-        ctx.kept(self)["loads"] = {g.name: [float(v) for v in out[k, :prm.dim]] + [float(v) for v in out[k, moment]]
+        ctx.kept(self)["loads"] = {g.name: [float(v) for v in out[k, :prm.dim]] + [float(v) for v in out[k, 3:]]
                                    for k, g in enumerate(self.groups)}
 
     @hookimpl

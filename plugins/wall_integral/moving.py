@@ -336,10 +336,9 @@ def pose_arrays(pose, dim):
 
 
 def load_of(load, dim):
-    """(force (dim,), moment (3,) or (1,) in 2D) from the blocks' partial sums."""
+    """(force (dim,), moment (3,): about z in 2D) from the blocks' partial sums."""
     total = load.sum(axis=0)
-    moment = total[3:] if dim == 3 else total[5:6]
-    return total[:dim], moment
+    return total[:dim], total[3:]
 
 
 def empty_load():

@@ -169,7 +169,7 @@ class RunContext:
         """Add what the fluid gave the walls of the moving group ``group`` (its name in
         ``case.moving``) during the current step: the momentum (N s; N s/m in 2D) and the
         angular momentum about the group's centre of rotation where it is (N m s; about z in
-        2D), each as up to three components. Plugins whose walls take momentum from the fluid
+        2D: the third component), each as up to three components. Plugins whose walls take momentum from the fluid
         (reflective impulses, ghost or wall-model pressure forces times dt) add here; the
         ``wall_loads`` writer turns the sums into forces and moments. Kept across a restart."""
         acc = self.run.kept.setdefault("wall_impulses", {}).setdefault(group, [0.0] * 6)
