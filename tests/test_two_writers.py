@@ -1,6 +1,8 @@
 """The two-writer drill: while a run writes its output directory, a second ``sph run``, a
 ``--overwrite`` and a ``--restart`` into the same directory are started at random moments
-(seeded, so every run of the drill draws the same moments). Every one must be refused
+(seeded, so every run of the drill draws the same moments; the first run is held with
+SIGSTOP while the second starts, so that how fast the machine is decides nothing). Every
+one must be refused
 (exit 2, one line naming the live run's process), and the first run's output must be
 complete and bit for bit that of an undisturbed run: every particle frame of particles.nc,
 every VTU frame and the collection, the final checkpoint's particles."""
@@ -9,6 +11,7 @@ from __future__ import annotations
 
 import json
 import random
+import signal
 import subprocess
 import time
 from pathlib import Path
@@ -73,12 +76,26 @@ def test_a_second_writer_at_any_moment_is_refused_and_changes_nothing(tmp_path):
                 assert first.poll() is None, first.communicate()
                 assert time.monotonic() < deadline, "the first run did not start writing"
                 time.sleep(0.005)
-            # a moment within the first quarter of the stepping: the second writer's own start-up
-            # (one to three seconds on a loaded machine) must end before the first run does
-            time.sleep(rng.uniform(0.0, 0.25 * stepping_s))
-            second = start(case_dir, out, *extra)
-            said, err = second.communicate(timeout=300)
-            still_running = first.poll() is None
+            # a moment within the first half of the stepping; the first run is then held
+            # (SIGSTOP: it keeps its lock and its state) while the second writer starts, so
+            # that a slow start-up of the second on a loaded machine cannot outlast the first
+            # run, and let go once the second has been answered
+            time.sleep(rng.uniform(0.0, 0.5 * stepping_s))
+            if first.poll() is not None:  # it ended first: hold it from the start instead
+                first.communicate()
+                launched = time.time_ns()
+                first = start(case_dir, out, "--overwrite")
+                marker = out / outdir.MARKER  # rewritten once the new run holds the lock
+                while not (marker.exists() and marker.stat().st_mtime_ns >= launched):
+                    assert first.poll() is None, first.communicate()
+                    time.sleep(0.001)
+            first.send_signal(signal.SIGSTOP)
+            try:
+                second = start(case_dir, out, *extra)
+                said, err = second.communicate(timeout=300)
+                still_running = first.poll() is None
+            finally:
+                first.send_signal(signal.SIGCONT)
             assert second.returncode == 2, (extra, second.returncode, still_running, said, err)
             assert err.strip() == (f"sph: error: {out}: another sph run (process {first.pid}) is writing this "
                                    "directory: wait for it to end, or pass --output DIR"), err
