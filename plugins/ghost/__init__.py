@@ -153,18 +153,18 @@ class GhostPlugin:
                 ctx.add_wall_load(name, np.asarray(row[:dim]) * dt, np.asarray(row[dim:]) * dt)
             return
 
+        from .loads import balance_load
+
         st, prm = ctx.state, ctx.params
         dim = prm.dim
-        g = np.asarray(prm.gravity, np.float64)[:dim]
-        scale = 1.0 - prm.rho_ref / st.rho if prm.rho_ref else np.ones(st.n)
-        f = -(st.m[:, None] * (acc - scale[:, None] * g))  # on the tank, per particle
+        g = np.zeros(3)
+        g[:dim] = np.asarray(prm.gravity, np.float64)[:dim]
         pose = self.tank.motion.pose(ctx.t)  # the step's start, where acc was evaluated
-        r = pos0 - (pose.centre + pose.shift)
-        if dim == 2:  # about z
-            moment = np.array([0.0, 0.0, (r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0]).sum()])
-        else:
-            moment = np.cross(r, f).sum(axis=0)
-        ctx.add_wall_load(self.tank.name, f.sum(axis=0) * dt, moment * dt)
+        origin = np.zeros(3)
+        origin[:dim] = pose.centre + pose.shift
+        out = np.zeros(6)
+        balance_load(pos0, acc, st.m, st.rho, g, float(prm.rho_ref), origin, out)
+        ctx.add_wall_load(self.tank.name, out[:dim] * dt, out[3:] * dt)
 
     def _pair_loads(self, ctx, fluid, src, planes, t):
         """Each plane group's load from the images' pair forces (:mod:`.loads`), kept for the

@@ -27,6 +27,31 @@ from sphcore.api import kernel_f, plane_distance
 
 
 @njit(cache=True)
+def balance_load(pos, acc, m, rho, gravity, rho_ref, origin, out):
+    """out (6,) <- the load on walls that hold every plane, from the fluid's momentum
+    balance: force -sum_i m_i (a_i - g_i), g_i = g (1 - rho_ref / rho_i), and its moment
+    about ``origin`` (3,), at the positions ``pos`` the accelerations were evaluated at.
+    One pass, no temporaries."""
+    dim = pos.shape[1]
+    for e in range(6):
+        out[e] = 0.0
+    for i in range(pos.shape[0]):
+        s = 1.0 - rho_ref / rho[i] if rho_ref != 0.0 else 1.0
+        f0 = -m[i] * (acc[i, 0] - s * gravity[0])
+        f1 = -m[i] * (acc[i, 1] - s * gravity[1])
+        f2 = -m[i] * (acc[i, 2] - s * gravity[2]) if dim == 3 else 0.0
+        r0 = pos[i, 0] - origin[0]
+        r1 = pos[i, 1] - origin[1]
+        r2 = pos[i, 2] - origin[2] if dim == 3 else 0.0
+        out[0] += f0
+        out[1] += f1
+        out[2] += f2
+        out[3] += r1 * f2 - r2 * f1
+        out[4] += r2 * f0 - r0 * f2
+        out[5] += r0 * f1 - r1 * f0
+
+
+@njit(cache=True)
 def group_loads(pos, rho, p, m, gpos, grho, gp, gm, normals, offsets, owner, origins, kernel_id, h, out):
     """out (groups, 6) += each plane group's force and moment (module docstring). Fluid
     ``pos``, ``rho``, ``p`` (the momentum equation's pressure), ``m``; images ``gpos`` ...;
