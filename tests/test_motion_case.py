@@ -69,6 +69,23 @@ def test_a_samples_file_is_read_with_comments_a_header_and_any_separator(tmp_pat
     assert pose.shift[0] == pytest.approx(0.01 * math.sin(0.015), rel=1e-6) and pose.shift[1] == 0.0
 
 
+def test_a_samples_file_that_is_a_pipe_or_a_device_is_refused_at_once(tmp_path):
+    """A FIFO or a link to /dev/zero as the samples file: refused naming the key, no hang."""
+    import os
+
+    case_dir = write_case(tmp_path / "case", case_with(tiny_case(), {
+        "domain.motion": [{"type": "translation_file", "file": "paddle.csv", "axis": [1, 0]}]}))
+    os.mkfifo(case_dir / "paddle.csv")
+    with pytest.raises(CaseError) as e:
+        runner.load(case_dir)
+    assert e.value.key == "domain.motion[0].file" and "not a regular file" in str(e.value)
+    (case_dir / "paddle.csv").unlink()
+    (case_dir / "paddle.csv").symlink_to("/dev/zero")
+    with pytest.raises(CaseError) as e:
+        runner.load(case_dir)
+    assert e.value.key == "domain.motion[0].file" and "not a regular file" in str(e.value)
+
+
 GOOD_SERIES = "0 0\n0.001 0.1\n0.003 0.2\n0.01 0.1\n"
 #: (changes, files, the key named, words of the message)
 BAD = {

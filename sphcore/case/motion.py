@@ -33,7 +33,9 @@ the key.
 from __future__ import annotations
 
 import math
+import os
 import re
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +45,8 @@ from sphcore.case.options import validate_table
 from sphcore.errors import CaseError
 from sphcore.geometry.motion import (ConstantVelocity, Motion, Ramp, RotationSeries, SineRotation, SineTranslation,
                                      Spline, TranslationSeries)
+
+MAX_SAMPLES_BYTES = 256 << 20  # a samples file larger than this is refused (a run holds it whole)
 
 #: keys of one motion part
 PART: dict[str, O] = {
@@ -91,10 +95,17 @@ def read_samples(path: Path, file, key, columns: tuple[int, ...]) -> tuple[np.nd
     accepted only as exactly 1 + one of ``columns`` value columns), time increasing, at
     least two rows, every number finite."""
     try:
+        st = os.stat(path)  # through a link: what would be read (a link to /dev/zero is a device)
+        if not stat.S_ISREG(st.st_mode):
+            what = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (a device, a pipe, a socket)"
+            raise CaseError(file, key, f"{path}: {what}: expected a text file of samples")
+        if st.st_size > MAX_SAMPLES_BYTES:
+            raise CaseError(file, key, f"{path}: {st.st_size / 2**20:.0f} MiB, larger than "
+                            f"{MAX_SAMPLES_BYTES >> 20} MiB: expected a text file of samples")
         text = path.read_text(encoding="utf-8", errors="strict")
     except FileNotFoundError:
         raise CaseError(file, key, f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as e:
+    except (OSError, ValueError, UnicodeDecodeError) as e:  # ValueError: a NUL byte in the name
         raise CaseError(file, key, f"{path}: cannot be read as text ({e})") from None
     rows = []
     for lineno, line in enumerate(text.splitlines(), 1):
