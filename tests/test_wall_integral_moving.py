@@ -124,6 +124,7 @@ def _accelerating_tank(tmp_path, name, a, ramp, t_end, window):
     return np.mean(samples, axis=0), len(samples), load, float(sim.state.m.sum())
 
 
+@pytest.mark.slow
 def test_water_in_an_accelerating_tank_tilts_to_the_slope_a_over_g(tmp_path):
     """A 0.3 m tank with 0.1 m of water (dx = 0.01 m) accelerates along +x, its acceleration
     rising over 1.5 s to a = g / 2. Over the next 0.8 s (more than a slosh period, 0.65 s)
