@@ -10,7 +10,7 @@
   :class:`WallTerms` (the per-particle boundary terms of ``sph_wall_terms``), particle kinds
   :data:`FLUID`, :data:`SPHERE`, :data:`GHOST`;
 - geometry: :class:`Planes`, and for numba kernels :func:`plane_distance`,
-  :func:`particle_distance`; finite walls :class:`Faces` (``ctx.case.faces``) with their
+  :func:`particle_distance`, :func:`normal_parts`; finite walls :class:`Faces` (``ctx.case.faces``) with their
   :class:`FaceGrid` (:func:`build_grid`), and for numba kernels :func:`nearest_point`,
   :func:`box_cells`,
   :func:`face_distance`, :func:`first_contact` (swept sphere), :func:`cell_span`;
@@ -40,7 +40,7 @@ from sphcore.geometry.facegeom import face_distance, first_contact, nearest_poin
 from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
 from sphcore.geometry.faces import Faces
 from sphcore.geometry.motion import Motion, MovingGroup, Pose, plane_groups, planes_at
-from sphcore.geometry.planes import Planes, outline, particle_distance, plane_distance
+from sphcore.geometry.planes import Planes, normal_parts, outline, particle_distance, plane_distance
 from sphcore.io.atomic import mark_written, write_atomically
 from sphcore.io.schedule import Schedule, schedule_options
 from sphcore.io.writer import ScheduledWriter, check_series, leading_complete, new_record, record_frame
@@ -57,7 +57,7 @@ from sphcore.plugin.hookspecs import hookimpl
 __all__ = [
     "hookimpl", "Option", "CaseError", "Instability", "OutputError",
     "RunContext", "Params", "ParticleState", "Sources", "Fields", "WallTerms", "FLUID", "SPHERE", "GHOST",
-    "Planes", "plane_distance", "particle_distance", "outline", "Motion", "MovingGroup", "Pose", "plane_groups", "planes_at",
+    "Planes", "plane_distance", "particle_distance", "normal_parts", "outline", "Motion", "MovingGroup", "Pose", "plane_groups", "planes_at",
     "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "face_distance", "first_contact",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
     "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",

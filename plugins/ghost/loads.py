@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from sphcore.api import kernel_f, plane_distance
+from sphcore.api import kernel_f, normal_parts, plane_distance
 
 
 @njit(cache=True)
@@ -142,7 +142,7 @@ def group_loads(pos, rho, p, m, gpos, grho, gp, gm, normals, offsets, owner, ori
 @njit(cache=True, inline="always")
 def _share_out(f0, f1, f2, near, m, normals, owner, origins, pos, i, dim, out):
     """Give the force (f0, f1, f2) on the walls to the groups of the image's planes near[:m]:
-    all of it to one group, or along the planes' normals (Gram system, Cramer's rule)."""
+    all of it to one group, or along the planes' normals (:func:`sphcore.api.normal_parts`)."""
     first = near[0]
     same = True
     for u in range(1, m):
@@ -150,42 +150,21 @@ def _share_out(f0, f1, f2, near, m, normals, owner, origins, pos, i, dim, out):
     if same or m > 3:
         _add(out, owner[first], origins, pos, i, dim, f0, f1, f2)
         return
-    M = np.eye(3)
-    r = np.zeros(3)
-    for u in range(m):
-        a = near[u]
-        r[u] = normals[a, 0] * f0 + normals[a, 1] * f1 + (normals[a, 2] * f2 if dim == 3 else 0.0)
-        for w in range(m):
-            b = near[w]
-            acc = 0.0
-            for d in range(dim):
-                acc += normals[a, d] * normals[b, d]
-            M[u, w] = acc
-    det = _det(M)
-    if det <= 1e-9:
+    c = np.empty(3)
+    if not normal_parts(normals, near, m, dim, f0, f1, f2, c):
         _add(out, owner[first], origins, pos, i, dim, f0, f1, f2)
         return
     rest0, rest1, rest2 = f0, f1, f2
     for u in range(m):
         a = near[u]
-        col = M.copy()
-        for w in range(3):
-            col[w, u] = r[w]
-        c = _det(col) / det
-        p0 = c * normals[a, 0]
-        p1 = c * normals[a, 1]
-        p2 = c * normals[a, 2] if dim == 3 else 0.0
+        p0 = c[u] * normals[a, 0]
+        p1 = c[u] * normals[a, 1]
+        p2 = c[u] * normals[a, 2] if dim == 3 else 0.0
         _add(out, owner[a], origins, pos, i, dim, p0, p1, p2)
         rest0 -= p0
         rest1 -= p1
         rest2 -= p2
     _add(out, owner[first], origins, pos, i, dim, rest0, rest1, rest2)
-
-
-@njit(cache=True, inline="always")
-def _det(a):
-    return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
-            + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
 
 
 @njit(cache=True, inline="always")

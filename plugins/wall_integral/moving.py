@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from sphcore.api import plane_distance
+from sphcore.api import normal_parts, plane_distance
 
 from .facewalls import add_terms, point_terms
 from .normals import set_projector
@@ -91,7 +91,8 @@ def _group_part(x0, x1, x2, dim, normals, offsets, member, support, g0, g1, g2):
     member[a]: G written in the normals of the planes within ``support`` of x,
     G = sum_a c_a n_a (G lies in their span), and the members' terms summed. Every near
     plane a member: G itself. Normals not independent (more than dim near planes, or
-    parallel ones): all of G to the group of the nearest plane."""
+    parallel ones): all of G to the group of the nearest plane
+    (:func:`sphcore.geometry.planes.normal_parts`)."""
     near = np.empty(3, np.int64)
     m = 0
     all_in = True
@@ -112,52 +113,22 @@ def _group_part(x0, x1, x2, dim, normals, offsets, member, support, g0, g1, g2):
         return 0.0, 0.0, 0.0
     if all_in:
         return g0, g1, g2
-    if m <= dim:
-        # Gram system M c = N G for the near normals (m <= 3)
-        M = np.zeros((3, 3))
-        r = np.zeros(3)
+    c = np.empty(3)
+    if m <= dim and normal_parts(normals, near, m, dim, g0, g1, g2, c):
+        p0 = 0.0
+        p1 = 0.0
+        p2 = 0.0
         for u in range(m):
             a = near[u]
-            r[u] = normals[a, 0] * g0 + normals[a, 1] * g1 + (normals[a, 2] * g2 if dim == 3 else 0.0)
-            for w in range(m):
-                b = near[w]
-                acc_ = 0.0
-                for e in range(dim):
-                    acc_ += normals[a, e] * normals[b, e]
-                M[u, w] = acc_
-        for u in range(m, 3):
-            M[u, u] = 1.0
-        det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1]) - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
-               + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
-        if det > 1e-9:
-            c = np.empty(3)
-            for u in range(3):  # Cramer's rule: column u of M replaced by r
-                c[u] = _det_with(M, r, u) / det
-            p0 = 0.0
-            p1 = 0.0
-            p2 = 0.0
-            for u in range(m):
-                a = near[u]
-                if member[a]:
-                    p0 += c[u] * normals[a, 0]
-                    p1 += c[u] * normals[a, 1]
-                    if dim == 3:
-                        p2 += c[u] * normals[a, 2]
-            return p0, p1, p2
+            if member[a]:
+                p0 += c[u] * normals[a, 0]
+                p1 += c[u] * normals[a, 1]
+                if dim == 3:
+                    p2 += c[u] * normals[a, 2]
+        return p0, p1, p2
     if member[nearest]:
         return g0, g1, g2
     return 0.0, 0.0, 0.0
-
-
-@njit(cache=True, inline="always")
-def _det_with(M, r, col):
-    """det of the 3 x 3 M with column ``col`` replaced by r."""
-    a = np.empty((3, 3))
-    for u in range(3):
-        for w in range(3):
-            a[u, w] = r[u] if w == col else M[u, w]
-    return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
-            + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
 
 
 @njit(cache=True, parallel=True)

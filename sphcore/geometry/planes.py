@@ -26,6 +26,45 @@ def plane_distance(normals, offsets, k, x0, x1, x2):
 
 
 @njit(cache=True, inline="always")
+def normal_parts(normals, near, m, dim, v0, v1, v2, c):
+    """Write v = (v0, v1, v2) in the normals of the planes near[:m] (m <= 3): c[:m] with
+    v = sum_u c[u] normals[near[u]] when v lies in their span (least squares otherwise),
+    from the Gram system of the normals by Cramer's rule. Returns False when the normals
+    are not independent (parallel planes) or m > 3; c is then left as it is. For walls
+    that move apart (a piston meeting a fixed floor): each wall's share of a vector along
+    the walls' normals."""
+    if m > 3 or m < 1:
+        return False
+    M = np.eye(3)
+    r = np.zeros(3)
+    for u in range(m):
+        a = near[u]
+        r[u] = normals[a, 0] * v0 + normals[a, 1] * v1 + (normals[a, 2] * v2 if dim == 3 else 0.0)
+        for w in range(m):
+            b = near[w]
+            acc = 0.0
+            for e in range(dim):
+                acc += normals[a, e] * normals[b, e]
+            M[u, w] = acc
+    det = _det3(M)
+    if det <= 1e-9:
+        return False
+    col = np.empty((3, 3))
+    for u in range(m):
+        for a in range(3):
+            for b in range(3):
+                col[a, b] = r[a] if b == u else M[a, b]
+        c[u] = _det3(col) / det
+    return True
+
+
+@njit(cache=True, inline="always")
+def _det3(a):
+    return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+            + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+
+
+@njit(cache=True, inline="always")
 def particle_distance(normals, offsets, k, pos, i):
     """:func:`plane_distance` of particle i of ``pos`` (n, dim)."""
     return plane_distance(normals, offsets, k, pos[i, 0], pos[i, 1], pos[i, 2] if pos.shape[1] == 3 else 0.0)
