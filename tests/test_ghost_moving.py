@@ -255,18 +255,21 @@ def test_two_groups_of_planes_carried_together_are_the_fixed_walls_seen_from_a_m
 L, H, DX = 0.3, 0.1, 0.01
 
 
-def _accelerating_tank(tmp_path, name, a, ramp, t_end, window):
+def accelerating_tank(tmp_path, name, a, ramp, t_end, window, plugins=("ghost",), changes=None):
     """Run water in the tank accelerating along x at ``a`` (m/s^2, reached over ``ramp`` s
-    by a quintic smooth step of the acceleration); sample the last ``window`` s every
+    by a quintic smooth step of the acceleration) with the wall treatment ``plugins`` (and
+    other case ``changes``); sample the last ``window`` s every
     0.025 s in the tank's frame: the surface slope (least-squares line through the
     highest particle of each dx-wide column, two columns off each wall), and the pressure
     gradient (least-squares plane p = p0 + G . x through the particles deeper than 3 h
     below their column's top and 2 dx off the side walls). Returns the samples' means of
-    (surface slope, -G_x / G_y, |G|)."""
+    (surface slope, -G_x / G_y, |G|), their number, the mean load on the tank over the
+    window from its impulses ((Fx, Fy) N/m; None for the tank at rest, a = 0, which has no
+    motion) and the water's mass (kg/m)."""
     from sphcore.run.build import build
 
     changes = {"domain.max": [L, 0.3], "blocks[0].max": [L, H], "particles.dx": DX, "time.t_end": t_end,
-               "time.dt": None, "plugins.use": ["ghost"]}
+               "time.dt": None, "plugins.use": list(plugins), **(changes or {})}
     if a:
         changes["domain.motion"] = [{"type": "translation_file", "file": "motion.txt", "axis": [1.0, 0.0]}]
     case_dir = write_case(tmp_path / name, case_with(tiny_case(), changes))
@@ -326,8 +329,8 @@ def test_water_in_an_accelerating_tank_tilts_to_the_slope_a_over_g(tmp_path):
     acceleration in the images' pressure (g instead of g - a_w) the back wall's images push
     too little and a particle crosses it at t = 1.39 s."""
     a, ramp, t_end, window = 9.81 / 2, 1.5, 2.3, 0.8
-    (surface, slope_p, grad), n, load, mass = _accelerating_tank(tmp_path, "accelerating", a, ramp, t_end, window)
-    (surface0, slope0, grad0), _, _, _ = _accelerating_tank(tmp_path, "rest", 0.0, ramp, t_end, window)
+    (surface, slope_p, grad), n, load, mass = accelerating_tank(tmp_path, "accelerating", a, ramp, t_end, window)
+    (surface0, slope0, grad0), _, _, _ = accelerating_tank(tmp_path, "rest", 0.0, ramp, t_end, window)
     assert n >= 30
     assert abs(surface0) < 1e-9 and abs(slope0) < 1e-9  # the tank at rest stays level
     assert surface == pytest.approx(-a / 9.81, abs=DX / (L - 4 * DX))

@@ -42,7 +42,7 @@ Run summary: ``ghosts_last`` (ghosts of the last force evaluation), ``ghosts_max
 
 from __future__ import annotations
 
-from sphcore.api import CaseError, Fields, Option, hookimpl, plane_groups
+from sphcore.api import CaseError, Fields, Option, hookimpl, plane_groups, tank_load
 
 from .images import MirrorImages, inverse_tait
 from .mirror import MAX_PLANES, TAIT_BASE_MIN
@@ -133,16 +133,10 @@ class GhostPlugin:
 
     @hookimpl
     def sph_after_integrate(self, ctx, pos0, pos, vel, acc, dt):
-        """The moving tank's load over the step: what the images pushed the fluid with.
-
-        Every wall is the tank's and the fluid's pair forces cancel in sum and in moment
-        (pressure and artificial viscosity act along x_ij, equal and opposite), so the
-        images' force on the fluid is sum_i m_i (a_i - g_i), g_i the gravity term the core
-        added (g, or g (1 - rho0/rho_i) with modified pressure), and the fluid's load on
-        the tank is its opposite, with its moment about the tank's centre of rotation where
-        it is; both times dt go to ``ctx.add_wall_load``. With the kernel gradient correction
-        the pair forces are not antisymmetric and the load carries that scheme's momentum
-        error too."""
+        """The moving walls' load over the step: a tank's from the fluid's momentum balance
+        (:func:`sphcore.api.tank_load`: exact, every wall is the tank's), each group's of
+        several from the loads the images gave at the step's start (:mod:`.loads`); times
+        dt to ``ctx.add_wall_load``."""
         if not self.groups or acc is None:
             return
         import numpy as np
@@ -153,18 +147,8 @@ class GhostPlugin:
                 ctx.add_wall_load(name, np.asarray(row[:dim]) * dt, np.asarray(row[dim:]) * dt)
             return
 
-        from .loads import balance_load
-
-        st, prm = ctx.state, ctx.params
-        dim = prm.dim
-        g = np.zeros(3)
-        g[:dim] = np.asarray(prm.gravity, np.float64)[:dim]
-        pose = self.tank.motion.pose(ctx.t)  # the step's start, where acc was evaluated
-        origin = np.zeros(3)
-        origin[:dim] = pose.centre + pose.shift
-        out = np.zeros(6)
-        balance_load(pos0, acc, st.m, st.rho, g, float(prm.rho_ref), origin, out)
-        ctx.add_wall_load(self.tank.name, out[:dim] * dt, out[3:] * dt)
+        force, moment = tank_load(ctx, self.tank, pos0, acc)
+        ctx.add_wall_load(self.tank.name, force * dt, moment * dt)
 
     def _pair_loads(self, ctx, fluid, src, planes, t):
         """Each plane group's load from the images' pair forces (:mod:`.loads`), kept for the

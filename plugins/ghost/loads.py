@@ -1,7 +1,7 @@
 """The load of the fluid on each group of moving planes, from the ghost images' pair forces.
 
 Where one group holds every plane (a tank) the plugin takes the load from the fluid's
-momentum balance instead, which is exact (``GhostPlugin.sph_after_integrate``). Where the
+momentum balance instead, which is exact (:func:`sphcore.api.tank_load`). Where the
 planes move in several groups (a piston in a fixed flume) the walls' total force does not
 say which wall took what, and the load of group k is summed pair by pair: the image j of a
 fluid particle pushes fluid particle i with the momentum equation's pressure term,
@@ -24,31 +24,6 @@ import numpy as np
 from numba import njit
 
 from sphcore.api import kernel_f, normal_parts, plane_distance
-
-
-@njit(cache=True)
-def balance_load(pos, acc, m, rho, gravity, rho_ref, origin, out):
-    """out (6,) <- the load on walls that hold every plane, from the fluid's momentum
-    balance: force -sum_i m_i (a_i - g_i), g_i = g (1 - rho_ref / rho_i), and its moment
-    about ``origin`` (3,), at the positions ``pos`` the accelerations were evaluated at.
-    One pass, no temporaries."""
-    dim = pos.shape[1]
-    for e in range(6):
-        out[e] = 0.0
-    for i in range(pos.shape[0]):
-        s = 1.0 - rho_ref / rho[i] if rho_ref != 0.0 else 1.0
-        f0 = -m[i] * (acc[i, 0] - s * gravity[0])
-        f1 = -m[i] * (acc[i, 1] - s * gravity[1])
-        f2 = -m[i] * (acc[i, 2] - s * gravity[2]) if dim == 3 else 0.0
-        r0 = pos[i, 0] - origin[0]
-        r1 = pos[i, 1] - origin[1]
-        r2 = pos[i, 2] - origin[2] if dim == 3 else 0.0
-        out[0] += f0
-        out[1] += f1
-        out[2] += f2
-        out[3] += r1 * f2 - r2 * f1
-        out[4] += r2 * f0 - r0 * f2
-        out[5] += r0 * f1 - r1 * f0
 
 
 @njit(cache=True)

@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.api import CaseError, Option, hookimpl, on_threads_by_size
+from sphcore.api import CaseError, Option, hookimpl, on_threads_by_size, tank_load
 
 
 class WallIntegralPlugin:
@@ -105,6 +105,10 @@ class WallIntegralPlugin:
                 moving[np.asarray(g.faces, np.int64)] = True
             self._fixed = np.flatnonzero(~moving)
         self._moving_faces = None  # per face group: (verts, grid arrays, stamps), built on first use
+        # one group holding every wall (a tank): its load from the fluid's momentum balance
+        nf = self.walls.count if self.walls is not None else 0
+        self.tank = groups[0] if len(groups) == 1 and len(groups[0].planes) == case.planes.count \
+            and len(groups[0].faces) == nf else None
 
     @hookimpl
     def sph_moving_walls(self):
@@ -161,9 +165,14 @@ class WallIntegralPlugin:
 
     @hookimpl
     def sph_after_integrate(self, ctx, pos0, pos, vel, acc, dt):
-        """The step's load on each moving group: the wall pressure force and moment of the
-        evaluation the step started from, times dt (:mod:`.moving`)."""
+        """The step's load on each moving group, times dt: a tank holding every wall from the
+        fluid's momentum balance (:func:`sphcore.api.tank_load`, exact), otherwise the wall
+        pressure's force and moment of the evaluation the step started from (:mod:`.moving`)."""
         if not self.plane_groups and not self.face_groups:
+            return
+        if self.tank is not None:  # every wall the tank's: the exact momentum balance
+            force, moment = tank_load(ctx, self.tank, pos0, acc)
+            ctx.add_wall_load(self.tank.name, force * dt, moment * dt)
             return
         dim = ctx.params.dim
         for name, row in ctx.kept(self).get("loads", {}).items():

@@ -20,7 +20,9 @@ point: they differ by |Omega| d < 2h |Omega|), and ``accel`` += T (-a_w) + s (-a
 outside first moment of minus the wall's acceleration a_w = D'' + alpha x r + Omega x
 (Omega x r) at the particle (the moment integral evaluated with -a_w in place of g).
 
-The load the fluid puts on the group is the reaction of the completion's terms of its
+A tank holding every wall takes its load from the fluid's momentum balance, exactly
+(:func:`sphcore.api.tank_load`). Otherwise (a piston, a paddle among fixed walls) the load
+the fluid puts on the group is the reaction of the completion's terms of its
 walls, F = sum_i m_i (2 (p_i / rho_i) G_k,i + ((rho_i - rho_ref)/rho_i) lambda A_k,i (g - a_w))
 over the particles near it, with the exact first moment A_k (g - a_w) = T_k (g - a_w) +
 s_k (g - a_w) of the group's walls, and its moment about the group's centre of rotation
