@@ -259,23 +259,31 @@ def test_help_and_refusals(tmp_path):
         assert res.returncode == 2 and res.stderr.startswith("wave_flume.py: error: ") and "Traceback" not in res.stderr
 
 
+#: the nearest gauge's tolerance against Biesel per case: the shipped runs read -0.8 % at
+#: kh = 1.0 and -6.4 % at kh = 1.8 (the shorter waves, 1.3 dx high, lose height on the way)
+NEAREST = {"wave_flume": 0.05, "wave_flume_kh18": 0.10}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("case", CASES, ids=lambda p: p.name)
-def test_the_full_flume_makes_biesels_waves_and_damps_them_on_the_way(case, tmp_path):
-    """The shipped case as it is (reflective walls, 1 to 5 minutes on 2 cores), as the README
-    measures it: H/S extrapolated back to the piston within 5 % of Biesel's, H decreasing
-    along the flume (the numerical damping: the exponential fitted over the gauges; a single
-    gauge's H scatters between waves, and at kh = 1.8 the third gauge reads low with two
-    whole waves in its window), the nearest gauge within 20 %."""
+def test_the_full_flume_makes_biesels_waves_and_havelocks_force(case, tmp_path):
+    """The shipped case as it is (the wall model, h_sml = 2 dx; 1.5 minutes a case on 2
+    cores), as the README measures it: H/S at the nearest gauge within 5 % of Biesel's at
+    kh = 1.0 (measured -0.8 %) and 10 % at kh = 1.8 (-6.4 %), extrapolated back to the
+    piston within 5 % at both (-1.9 %, +0.6 %), and the piston's first-harmonic force within
+    10 % of Havelock's (+3.2 %, -1.0 %)."""
     from sphcore.run import runner
 
     out = tmp_path / "output"
     s = runner.run(case, quiet=True, output=out).summary
     assert s["status"] == "completed", s["message"]
-    m = wf.measure(wf.open_run(out))
+    run = wf.open_run(out)
+    m = wf.measure(run)
     rows = m["rows"]
     assert all(r["waves"] >= 1 for r in rows), [(r["name"], r["waves"]) for r in rows]
     hs = [r["HS"] for r in rows]
-    assert abs(hs[0] / m["biesel"] - 1.0) < 0.20, (hs, m["biesel"])
-    rate, at_piston = wf.decay(m)
-    assert rate > 0.0 and abs(at_piston / m["biesel"] - 1.0) < 0.05, (rate, at_piston, m["biesel"])
+    assert abs(hs[0] / m["biesel"] - 1.0) < NEAREST[case.name], (hs, m["biesel"])
+    _, at_piston = wf.decay(m)
+    assert abs(at_piston / m["biesel"] - 1.0) < 0.05, (at_piston, m["biesel"])
+    force = wf.paddle_force(run, m)
+    assert force["amplitude"] == pytest.approx(force["theory"]["amplitude"], rel=0.10)
