@@ -118,9 +118,10 @@ class WallIntegralPlugin:
 
     @hookimpl
     def sph_wall_completion(self, dim):
-        from .completion import complete_at_wall
+        from .completion import complete_at_moving_wall, complete_at_wall
 
-        return complete_at_wall
+        # the terms of moving walls are compiled only into the runs that have them
+        return complete_at_moving_wall if self.plane_groups or self.face_groups else complete_at_wall
 
     @hookimpl
     def sph_wall_terms(self, ctx, terms):

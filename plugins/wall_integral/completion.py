@@ -13,6 +13,18 @@ from numba import njit
 
 @njit(cache=True, inline="always")
 def complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam):
+    """:func:`complete` for walls that do not move (the terms of moving walls compiled out)."""
+    return complete(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam, False)
+
+
+@njit(cache=True, inline="always")
+def complete_at_moving_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam):
+    """:func:`complete` with the terms of walls that move (``wall.flux``, ``wall.accel``)."""
+    return complete(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam, True)
+
+
+@njit(cache=True, inline="always")
+def complete(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, dr, b0, b1, b2, gam, moving):
     """Add the wall's boundary integrals to particle i's sums (module docstring).
 
     The wall stands for the missing part of the support, filled with the mirror image of
@@ -38,7 +50,7 @@ def complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a
     would be pushed and decompressed as if the fluid surrounded it (measured: a splash
     particle of the Lobovsky impact fell below 0.5 rho0). phi = 1 on the initial lattice.
 
-    Walls that move (``wall.flux`` not empty): continuity takes the velocity relative to
+    Walls that move (``moving``, a constant of each compiled completion): continuity takes the velocity relative to
     the walls, 2 rho_i (v_i - v_w) . G_w = 2 rho_i (v_i . G_w - phi sum_k v_wk . G_k), and
     the hydrostatic extrapolation the walls' acceleration: in a wall's frame the mirror
     fluid's pressure grows along g - a_w (Adami et al. 2012, Eq. 27, for the same
@@ -69,7 +81,6 @@ def complete_at_wall(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a
     h0 = phi * en0 + t0 - tn0
     h1 = phi * en1 + t1 - tn1
     h2 = phi * en2 + t2 - tn2
-    moving = wall.flux.shape[0] > 0
     if moving:  # the walls' acceleration: in their frame the mirror's pressure follows g - a_w
         m0 = lam * wall.accel[i, 0]
         m1 = lam * wall.accel[i, 1]
