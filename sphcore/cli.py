@@ -73,40 +73,43 @@ def _fail(msg, status):
     return status
 
 
-class Terminated(BaseException):
-    """SIGTERM arrived outside a run's own handler (while sph starts: imports, set-up)."""
-
-
-def _terminated(signum, frame):
-    raise Terminated()
+def _starting(signum, frame):
+    """SIGINT or SIGTERM while sph starts (imports, set-up): one line and the exit status,
+    at once. An exception raised here could be lost (Python drops one raised inside a
+    finaliser that the garbage collector happens to be running), and the run would go on;
+    nothing of the run is written before its own handlers replace this one."""
+    what = "interrupted" if signum == signal.SIGINT else "terminated"
+    os.write(2, f"sph: error: {what} while starting; nothing written\n".encode())
+    os._exit(128 + signum)
 
 
 def main(argv=None) -> int:
-    # SIGTERM (and Ctrl-C, as KeyboardInterrupt) while the modules load or the case is set
-    # up ends with one line; a run installs its own handlers (checkpoint, then stop)
+    # SIGINT and SIGTERM while the modules load or the case is set up end with one line; a
+    # run installs its own handlers (checkpoint, then stop)
     caught = threading_main() and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
     if caught:
-        signal.signal(signal.SIGTERM, _terminated)
+        signal.signal(signal.SIGTERM, _starting)
+        signal.signal(signal.SIGINT, _starting)
     try:
         return _main(argv)
     except BrokenPipeError:  # `sph options | head`: the reader left; stop quietly, as other tools do
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # Python's own flush at exit must not fail again
         return 128 + signal.SIGPIPE
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # a caller's own SIGINT handling (sph started from Python)
         return _fail("interrupted while starting; nothing written", 128 + signal.SIGINT)
-    except Terminated:
-        return _fail("terminated while starting; nothing written", 128 + signal.SIGTERM)
     finally:
         if caught:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def default_termination() -> None:
-    """SIGTERM back to the system's default (a command that starts processes of its own:
-    they must not inherit sph's start-up handler)."""
-    if threading_main() and signal.getsignal(signal.SIGTERM) is _terminated:
+    """SIGTERM and SIGINT back to Python's defaults (a command that starts processes of its
+    own: they must not inherit sph's start-up handler)."""
+    if threading_main() and signal.getsignal(signal.SIGTERM) is _starting:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def threading_main() -> bool:
@@ -167,8 +170,6 @@ def _main(argv=None) -> int:
         return _fail(str(e), 2)
     except KeyboardInterrupt:  # Ctrl-C before the run's own handler is installed (set-up)
         return _fail("interrupted during set-up; nothing written", 128 + signal.SIGINT)
-    except Terminated:
-        return _fail("terminated during set-up; nothing written", 128 + signal.SIGTERM)
     summary, status = result.summary, result.status
     print(f"{summary['case']}: {status}: t = {summary['t']:.6g} s, {summary['steps']} steps, "
           f"{summary['n_particles']} particles, {summary['wall_time_s']:.2f} s wall, "
