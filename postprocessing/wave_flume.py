@@ -79,6 +79,14 @@ def biesel(kh):
     return 2.0 * (np.cosh(x) - 1.0) / (np.sinh(x) + x)
 
 
+def flap(kh):
+    """The transfer function of a flap hinged at the floor, H/S = 4 (sinh kh / kh)
+    (kh sinh kh - cosh kh + 1) / (sinh 2kh + 2kh), S the stroke at the still-water level
+    (Dean & Dalrymple, ch. 6; -> kh/2 in shallow water, -> 2 in deep)."""
+    x = np.asarray(kh, float)
+    return 4.0 * (np.sinh(x) / x) * (x * np.sinh(x) - np.cosh(x) + 1.0) / (np.sinh(2.0 * x) + 2.0 * x)
+
+
 def group_velocity(k, h, g=9.81):
     """cg = c/2 (1 + 2kh / sinh 2kh), c = omega / k (m/s)."""
     kh = k * h
@@ -155,16 +163,19 @@ def flume(run) -> dict:
     if dim != 2:
         raise RunError(f"{run.dir}: a {dim}D run (expected a 2D wave flume)")
     domain = cfg.get("domain", {})
-    piston = None  # (key of the motion, the entry, its sine_translation part)
+    piston = None  # (key of the motion, the entry, its sine_translation or sine_rotation part)
     for kind in ("planes", "walls"):
         for k, entry in enumerate(domain.get(kind) or []):
             for part in entry.get("motion") or []:
-                if part.get("type") == "sine_translation" and piston is None:
+                kinds = ("sine_translation", "sine_rotation") if kind == "planes" else ("sine_translation",)
+                if part.get("type") in kinds and piston is None:
                     piston = (f"domain.{kind}[{k}]", entry, part)
     if piston is None:
         raise RunError(f"{run.dir}: no [[domain.planes]] or [[domain.walls]] entry moves with a sine_translation "
-                       f"(expected a piston wave maker)")
+                       f"(expected a piston wave maker) or a plane with a sine_rotation (a flap)")
     key, wall, part = piston
+    if part["type"] == "sine_rotation":
+        return _flap(run, cfg, domain, key, wall, part)
     axis = np.asarray(part["axis"], float)
     axis = axis / np.linalg.norm(axis)
     if abs(axis[0]) < 0.999:
@@ -233,6 +244,32 @@ def first_harmonic(t, y, omega):
     return float(coef[0]), float(math.hypot(coef[1], coef[2])), float(math.atan2(coef[1], coef[2]))
 
 
+def _flap(run, cfg, domain, key, wall, part) -> dict:
+    """The flume of a flap: a plane facing +x turning about a hinge on the floor; its stroke
+    at the still-water level S = 2 h tan(amplitude)."""
+    if float(np.asarray(wall["normal"], float)[0]) <= 0.0 or abs(float(wall["normal"][1])) > 1e-12:
+        raise RunError(f"{run.dir}: {key} has the normal {wall['normal']} (expected a flap facing +x)")
+    floor, far = _floor_and_far(run, domain)
+    face = float(wall["point"][0])
+    hinge = np.asarray(part["centre"], float)
+    if abs(hinge[0] - face) > 1e-9 or abs(hinge[1] - floor) > 1e-9:
+        raise RunError(f"{run.dir}: {key} turns about {part['centre']} (expected a hinge on the floor at its face)")
+    block = run.first_block()
+    if not block:
+        raise RunError(f"{run.dir}: no fluid block in the case")
+    _, hi = run.block_extent(block)
+    gauges = [(d["name"], float(d["point"][0])) for d in (cfg.get("probes") or {}).get("depth") or []]
+    if not gauges:
+        raise RunError(f"{run.dir}: the case has no [[probes.depth]] gauges")
+    g = abs(float(cfg.get("physics", {}).get("gravity", [0.0, -9.81])[1]))
+    h = hi[1] - floor
+    period = part.get("period") or (1.0 / part["frequency"] if part.get("frequency") else None)
+    return {"h": h, "face": face, "far": far, "S": 2.0 * h * math.tan(math.radians(abs(float(part["amplitude"])))),
+            "T": float(period), "g": g, "ramp_end": float(part.get("ramp_start", 0.0)) + float(part.get("ramp", 0.0)),
+            "ramp_start": float(part.get("ramp_start", 0.0)), "gauges": gauges, "load": f"{key}.motion",
+            "paddle": "flap", "phase0": 0.0}
+
+
 def measure(run, margin=0.0) -> dict:
     """The flume of ``run`` and, per gauge, its window, waves and H/S."""
     f = flume(run)
@@ -258,7 +295,8 @@ def measure(run, margin=0.0) -> dict:
         H1 = first_harmonic(t[sel], eta[sel], omega)[1] * 2.0 if sel.sum() > 3 else math.nan
         rows.append({"name": name, "x": x, "t0": t0, "t1": t1, "waves": len(heights), "H": H,
                      "HS": H / f["S"], "HS1": H1 / f["S"], "eta": eta})
-    return {**f, "rho0": data["rho0"], "k": k, "kh": kh, "cg": cg, "L": 2.0 * math.pi / k, "biesel": float(biesel(kh)),
+    theory = flap(kh) if f.get("paddle") == "flap" else biesel(kh)
+    return {**f, "rho0": data["rho0"], "k": k, "kh": kh, "cg": cg, "L": 2.0 * math.pi / k, "biesel": float(theory),
             "t": t, "rows": rows, "dir": run.dir}
 
 
@@ -267,7 +305,7 @@ def paddle_force(run, m, margin=0.0) -> dict | None:
     x = 0: from the ramp's end (plus margin periods) to the return of the far wall's reflection
     (ramp_start + 2 L / cg) or the run's end; beside it Havelock's force (havelock)."""
     path = run.dir / WALL_LOADS_CSV
-    if not path.is_file():
+    if not path.is_file() or m.get("paddle") == "flap":  # Havelock's force is a piston's
         return None
     try:
         lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
@@ -320,7 +358,7 @@ def report(m, force):
     print(f"{m['dir']}: h = {m['h']:.4g} m, S = {m['S']:.4g} m, T = {m['T']:.4g} s, kh = {m['kh']:.4f}, "
           f"L = {m['L']:.4g} m, H/L (Biesel) = {m['biesel'] * m['S'] / m['L']:.4f}, cg = {m['cg']:.4g} m/s, "
           f"piston face to far wall {m['far'] - m['face']:.4g} m")
-    print(f"  Biesel H/S = {m['biesel']:.4f}")
+    print(f"  Biesel H/S = {m['biesel']:.4f}" + (" (a flap hinged at the floor)" if m.get("paddle") == "flap" else ""))
     print(f"  {'gauge':<8}{'x [m]':>8}{'x/h':>6}{'window [s]':>18}{'waves':>7}{'H [m]':>10}{'H/S':>8}"
           f"{'Biesel':>8}{'error':>9}   {'H1/S':>7}{'error':>9}")
     for r in m["rows"]:
@@ -371,7 +409,10 @@ def plot(m, all_runs, png):
     ax.legend(fontsize=8, loc="upper left")
     top = max(2.5, max(x["kh"] for x in all_runs) * 1.2)
     kh = np.linspace(1e-3, top, 300)
-    bx.plot(kh, biesel(kh), "k-", label="Biesel (linear)")
+    if any(x.get("paddle") != "flap" for x in all_runs):
+        bx.plot(kh, biesel(kh), "k-", label="Biesel, piston (linear)")
+    if any(x.get("paddle") == "flap" for x in all_runs):
+        bx.plot(kh, flap(kh), "k--", label="Biesel, flap (linear)")
     for x in all_runs:
         for j, r in enumerate(x["rows"]):
             if r["waves"]:
