@@ -103,6 +103,10 @@ def test_no_import_circle_between_modules():
 NAMEDTUPLE_API = {"_fields", "_replace", "_asdict", "_make", "_field_defaults"}
 
 
+#: standard-library functions whose documented names begin with an underscore
+PUBLIC_UNDERSCORED = {("os", "_exit")}
+
+
 def _private_uses(tree: ast.AST):
     """(line, text) of every ``x._name`` whose ``x`` is not ``self`` or ``cls`` (dunders are
     not private), and of every private name imported from another module."""
@@ -112,6 +116,8 @@ def _private_uses(tree: ast.AST):
             if isinstance(base, ast.Name) and base.id in ("self", "cls"):
                 continue
             if node.attr in NAMEDTUPLE_API:
+                continue
+            if isinstance(base, ast.Name) and (base.id, node.attr) in PUBLIC_UNDERSCORED:
                 continue
             yield node.lineno, ast.unparse(node)
         elif isinstance(node, ast.ImportFrom) and node.module != "__future__":
