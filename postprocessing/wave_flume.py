@@ -192,6 +192,18 @@ def flume(run) -> dict:
     else:
         raise RunError(f"{run.dir}: {key} is a {wall.get('shape')} (expected a box or a polygon piston)")
     floor, far = _floor_and_far(run, domain)
+    h, gauges, g = _water(run, cfg, floor)
+    return {"h": h, "face": face, "far": far,
+            "S": 2.0 * abs(float(part["amplitude"])), "T": float(period), "g": g,
+            "ramp_end": float(part.get("ramp_start", 0.0)) + float(part.get("ramp", 0.0)),
+            "ramp_start": float(part.get("ramp_start", 0.0)), "gauges": gauges, "load": f"{key}.motion",
+            # X(t) = S/2 sin(omega t + phase0) along +x (sphcore's sine_translation, t absolute)
+            "phase0": math.radians(float(part.get("phase", 0.0))) + (math.pi if part["amplitude"] * axis[0] < 0
+                                                                     else 0.0)}
+
+
+def _water(run, cfg, floor) -> tuple[float, list, float]:
+    """(still-water depth h above ``floor``, the depth gauges (name, x), g) of a run's case."""
     block = run.first_block()
     if not block:
         raise RunError(f"{run.dir}: no fluid block in the case")
@@ -199,14 +211,7 @@ def flume(run) -> dict:
     gauges = [(d["name"], float(d["point"][0])) for d in (cfg.get("probes") or {}).get("depth") or []]
     if not gauges:
         raise RunError(f"{run.dir}: the case has no [[probes.depth]] gauges")
-    g = abs(float(cfg.get("physics", {}).get("gravity", [0.0, -9.81])[1]))
-    return {"h": hi[1] - floor, "face": face, "far": far,
-            "S": 2.0 * abs(float(part["amplitude"])), "T": float(period), "g": g,
-            "ramp_end": float(part.get("ramp_start", 0.0)) + float(part.get("ramp", 0.0)),
-            "ramp_start": float(part.get("ramp_start", 0.0)), "gauges": gauges, "load": f"{key}.motion",
-            # X(t) = S/2 sin(omega t + phase0) along +x (sphcore's sine_translation, t absolute)
-            "phase0": math.radians(float(part.get("phase", 0.0))) + (math.pi if part["amplitude"] * axis[0] < 0
-                                                                     else 0.0)}
+    return hi[1] - floor, gauges, abs(float(cfg.get("physics", {}).get("gravity", [0.0, -9.81])[1]))
 
 
 def _floor_and_far(run, domain) -> tuple[float, float]:
@@ -254,15 +259,7 @@ def _flap(run, cfg, domain, key, wall, part) -> dict:
     hinge = np.asarray(part["centre"], float)
     if abs(hinge[0] - face) > 1e-9 or abs(hinge[1] - floor) > 1e-9:
         raise RunError(f"{run.dir}: {key} turns about {part['centre']} (expected a hinge on the floor at its face)")
-    block = run.first_block()
-    if not block:
-        raise RunError(f"{run.dir}: no fluid block in the case")
-    _, hi = run.block_extent(block)
-    gauges = [(d["name"], float(d["point"][0])) for d in (cfg.get("probes") or {}).get("depth") or []]
-    if not gauges:
-        raise RunError(f"{run.dir}: the case has no [[probes.depth]] gauges")
-    g = abs(float(cfg.get("physics", {}).get("gravity", [0.0, -9.81])[1]))
-    h = hi[1] - floor
+    h, gauges, g = _water(run, cfg, floor)
     period = part.get("period") or (1.0 / part["frequency"] if part.get("frequency") else None)
     return {"h": h, "face": face, "far": far, "S": 2.0 * h * math.tan(math.radians(abs(float(part["amplitude"])))),
             "T": float(period), "g": g, "ramp_end": float(part.get("ramp_start", 0.0)) + float(part.get("ramp", 0.0)),
