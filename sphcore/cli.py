@@ -186,16 +186,10 @@ def _main(argv=None) -> int:
 
 def _options(only=None) -> int:
     """Print every case key: the core's tables and each usable plugin's."""
-    from sphcore.case import defaults
     from sphcore.case.options import Option
     from sphcore.plugin import pluginhost
 
-    tables = {("core", k): v for k, v in defaults.CORE.items()}
-    tables.update({("core", "blocks[]"): defaults.BLOCK, ("core", "domain.planes[]"): defaults.PLANE,
-                   ("core", "domain.walls[]"): defaults.WALL})
-    for name, info in sorted(pluginhost.available().items()):
-        if not info.error:
-            tables.update({(name, t): schema for t, schema in (info.tables or {}).items()})
+    tables = pluginhost.option_tables()
     owners = {o for o, _ in tables}
     usable = {name for name, info in pluginhost.available().items() if not info.error}
     if only is not None and only not in owners:

@@ -178,6 +178,19 @@ def option_schemas(file="case.toml", sections=None) -> dict:
     return schemas
 
 
+def option_tables() -> dict:
+    """Every case table a user can write, in the order ``sph options`` prints them:
+    ``{(owner, table): schema}``, owner ``"core"`` or a usable plugin's name, schema
+    ``{key: Option}`` (or one Option for a table that is a single value)."""
+    tables = {("core", k): v for k, v in defaults.CORE.items()}
+    tables.update({("core", "blocks[]"): defaults.BLOCK, ("core", "domain.planes[]"): defaults.PLANE,
+                   ("core", "domain.walls[]"): defaults.WALL})
+    for name, plugin in sorted(available().items()):
+        if not plugin.error:
+            tables.update({(name, t): schema for t, schema in (plugin.tables or {}).items()})
+    return tables
+
+
 def _uses(raw) -> list:
     """The plugin names of a raw case's plugins.use, as far as they are strings (the
     validation reports the rest)."""
