@@ -50,7 +50,7 @@ VTK_TYPES = {np.dtype(np.float64): "Float64", np.dtype(np.int64): "Int64", np.dt
              np.dtype(np.uint8): "UInt8"}
 VTK_VERTEX = 1  # VTK's cell type of one point
 BLOCK = 32768  # bytes per compressed block, as VTK writes them
-ZLIB_LEVEL = 1  # within 1 % of level 6's size for particle frames, half the time (docs/speed.md)
+ZLIB_LEVEL = 1  # within 1 % of level 6's size for particle frames, half the time
 
 
 def _encoded(a: np.ndarray, compress: bool) -> str:
@@ -209,7 +209,7 @@ class VtuWriter(ScheduledWriter):
     def sph_options(self):
         return {TABLE: {**super().sph_options()[TABLE], "compress": Option(
             True, "bool", doc="zlib-compress each frame's arrays (level 1): about half the file size, a few times "
-            "the write time (docs/speed.md); may change on --restart (each frame says how it is written)",
+            "the write time; may change on --restart (each frame says how it is written)",
             restart=True)}}
 
     @hookimpl

@@ -46,7 +46,7 @@ def _parser():
 def _sweep_parser(sub):
     w = sub.add_parser("sweep", help="run a grid of case variants on Dask, gather them in sweep.nc",
                        description="Run every combination of the --vary values as a Dask task; write "
-                       "<output>/sweep.nc, print a table and draw <output>/pareto.png. See docs/sweep.md.")
+                       "<output>/sweep.nc, print a table and draw <output>/pareto.png. See docs/howto/sweeps.md.")
     w.add_argument("case_dir")
     w.add_argument("--vary", action="append", default=[], metavar="KEY=V1,V2,...",
                    help="values of a case key, split on commas outside brackets, each read as TOML like --set "

@@ -1,7 +1,7 @@
 """How the cost of a full SPH step grows with the particle count, per boundary plugin:
 particle-steps per second, microseconds per particle-step, peak RSS and memory per particle.
 
-    python benchmarks/speed/bench_scale.py                       # the table of docs/speed_accuracy.md
+    python benchmarks/speed/bench_scale.py                       # particle-steps/s against particle count
     python benchmarks/speed/bench_scale.py --sizes2d 1000 10000 --sizes3d --plugins reflective
 
 A still-water block (hydrostatic start, gravity, artificial viscosity alpha = 0.1) sits at

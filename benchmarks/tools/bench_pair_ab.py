@@ -22,7 +22,7 @@ HEAD``): that A/A run shows what the script reads when nothing differs. On a mac
 whose speed drifted it read 0.85-0.92 with A always first, hence the alternating order;
 alternating, 0.96-1.06 (fastest calls) and 0.94-1.05 (median of the rounds) with another
 job on the other core, 0.91-1.05 and 0.92-0.99 without: differences within about 10 % are
-noise there (docs/speed.md).
+noise there (docs/explanation/performance.md).
 
 A is loaded as the module ``sphcore.equations_a``: its imports resolve to this checkout's
 modules, so the file must fit them (the same ``Fields``, grid view and parameters). Its

@@ -25,7 +25,7 @@ them (lambda the interior's lattice normalisation, F the side wall's lattice err
 that a column along a side wall is held up as the interior is. Why this formulation: it
 needs no wall particles (the paper's walls stay planes), it is exact for the geometry, and
 it is consistent with the interior on the lattice the blocks are filled with. Its measured
-state (hydrostatic tank, wall-pressure experiments) is in docs/wall_pressure.md.
+state (hydrostatic tank, wall-pressure experiments) is in docs/explanation/wall_model.md and the validation pages.
 
 Finite walls (``[[domain.walls]]``: obstacles, meshes) add their exact terms too
 (:mod:`.facewalls`, :mod:`.meshfaces`), without the lattice-error correction the planes
@@ -72,7 +72,7 @@ class WallIntegralPlugin:
             "faces": Option("exact", "str", doc="wall terms of finite faces (meshes, boxes, polygons): 'exact' "
                             "integrates every face within 2h of every particle every step; 'table' computes them "
                             "once on a grid and interpolates them (much faster next to fine meshes, ~1% error in "
-                            "G: docs/walls.md)", choices=("exact", "table")),
+                            "G: docs/explanation/wall_model.md)", choices=("exact", "table")),
             "table_spacing": Option(0.25, "float", doc="node spacing of the faces' table, in units of h",
                                     positive=True),
             "table_max_nodes": Option(2_000_000, "int", doc="largest table (14 numbers, 112 bytes, a node); a larger one "

@@ -89,7 +89,7 @@ CORE: dict[str, dict[str, O]] = {
         "t_end": O(1.0, "float", "s", "simulated time", positive=True),
         "dt": O(None, "float", "s", "fixed time step; adaptive (CFL) when unset", positive=True, nullable=True),
         "cfl": O(0.3, "float", positive=True,
-                 doc="acoustic Courant number for the adaptive step (docs/speed.md: 0.45 is still stable for the "
+                 doc="acoustic Courant number for the adaptive step (docs/explanation/time_integration.md: 0.45 is still stable for the "
                      "dam breaks, 0.4 is not for a ghost tank at rest)"),
         "force_factor": O(0.25, "float", doc="dt <= force_factor * sqrt(h / |a|max)", positive=True),
         "viscous_factor": O(0.125, "float", doc="dt <= viscous_factor * h^2 / nu", positive=True),

@@ -21,7 +21,7 @@ def prepare() -> None:
       once, though, and waking it costs more than a small loop's work, so a short spin
       (``GOMP_SPINCOUNT`` = 1,000 busy-wait iterations, ~25 us) bridges the gaps inside a
       call; longer spins made two fixed threads 2.5 times slower than one with a core busy
-      (docs/speed.md). libgomp reads both when numba first loads its threading layer, so
+      (docs/explanation/performance.md). libgomp reads both when numba first loads its threading layer, so
       they are set here, before any parallel kernel; a user's explicit setting wins.
     - numba's on-disk cache: :func:`sphcore.jit.cache.refresh` removes the caches of edited
       sources and of what was compiled into other functions.

@@ -57,7 +57,7 @@ def on_threads_by_size(n: int, minimum: int, kernel, *args):
     parallel build: a serial copy of a large loop body beside the parallel one doubles what
     numba compiles, and its parallel passes grow faster than the body (the wall model's
     plane terms: 107-118 -> 48-67 s to compile; with OpenMP, sphcore's threading layer, the
-    one-thread call ran as fast as the serial loop: docs/speed.md). The count is set from
+    one-thread call ran as fast as the serial loop). The count is set from
     Python because numba cannot cache a kernel that sets it. Use it where the loop's
     iterations are independent (the result does not depend on the thread count)."""
     if n >= minimum:

@@ -154,8 +154,7 @@ def forward_pairs(k, n_dest, spos, order, rows, nrows, r2max, buf):
     flow (on a lattice at rest the predictor learns the pattern); here it is a branch-free
     compaction over positions contiguous in memory (the index is always stored, the count
     advances only when the test passes), and the pair loop then runs over partners only
-    (measured change by change in docs/speed.md, "The pair loop";
-    ``benchmarks/speed/bench_pairs.py`` prints today's figure).
+    (``benchmarks/speed/bench_pairs.py`` measures it; docs/explanation/performance.md).
     """
     dim = spos.shape[1]
     p0 = spos[k, 0]

@@ -21,7 +21,7 @@ chosen count's time for the same steps). The use phase lasts ``excess / budget``
 time, so that probing costs at most ``budget`` (2 %) of the run on any number of cores
 (with 16 threads the one-thread windows are ~10x slower per step; the use phase grows to
 match); it doubles each time a probe keeps the choice, up to ``MAX_USE_S``. Measured on
-two cores in docs/speed.md (``benchmarks/speed/bench_loaded.py``).
+two cores by ``benchmarks/speed/bench_loaded.py`` (docs/explanation/performance.md).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Sweep specifications: ``--vary`` value lists, indexed keys and the grid of variants.
 
-Syntax (see docs/sweep.md):
+Syntax (see docs/howto/sweeps.md):
 
 - ``--vary KEY=V1,V2,...``: the values are split on the commas that lie outside brackets,
   braces and quoted strings, so an item may be a TOML array or inline table
