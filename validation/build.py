@@ -4,7 +4,8 @@
 
 Each validation page of the documentation, ``docs/validation/<NAME>.md``, has a module
 ``validation/pages/<NAME>.py`` (modules whose name starts with ``_`` are helpers, not
-pages). A page module defines:
+pages, importable by the pages under their own names: ``from _common import run_case``).
+A page module defines:
 
 - ``NAME`` (str): the page's name; its page is ``docs/validation/<NAME>.md``;
 - ``TITLE`` (str): what the page validates, one line (printed by the build);
@@ -54,7 +55,14 @@ DOCS = ROOT / "docs" / "validation"
 
 def discover() -> dict:
     """The page modules of ``validation/pages/``, by their NAME (file order)."""
-    sys.path.insert(0, str(PAGES))  # the pages import their helpers as ``_common``
+    # the helpers (_common.py first, then the others in name order), importable by their
+    # names as the pages import them: ``from _common import run_case``
+    helpers = sorted(PAGES.glob("_*.py"), key=lambda p: (p.stem != "_common", p.name))
+    for path in helpers:
+        if path.stem != "__init__":
+            spec = importlib.util.spec_from_file_location(path.stem, path)
+            sys.modules[path.stem] = importlib.util.module_from_spec(spec)
+            spec.loader.exec_module(sys.modules[path.stem])
     pages = {}
     for path in sorted(PAGES.glob("*.py")):
         if path.name.startswith("_"):

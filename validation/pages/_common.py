@@ -10,6 +10,7 @@ it is already there, finished, and was made from the same command and the same c
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import math
 import shutil
@@ -105,6 +106,24 @@ def run_case(case: str, out: Path, sets: list[str] = (), t_end: float | None = N
     (out / STAMP).write_text(json.dumps(want, indent=1) + "\n")
     print(f"  {out.name}: {s['status']} in {time.perf_counter() - t0:.0f} s", flush=True)
     return {**s, "reused": False}
+
+
+def load(path: Path, name: str):
+    """The Python file ``path`` loaded as the module ``name`` (kept in sys.modules)."""
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, path)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+    return sys.modules[name]
+
+
+def toolkit(script: str):
+    """``postprocessing/<script>.py`` as a module, for its definitions (the same figures the
+    script prints). The toolkit's scripts import their sibling ``runs`` by name, as Python
+    finds it when a script runs from its folder: it is loaded first under that name."""
+    runs = load(POSTPROCESSING / "runs.py", "runs")
+    return runs if script == "runs" else load(POSTPROCESSING / f"{script}.py", f"postprocessing_{script}")
 
 
 def postprocess(script: str, *args) -> subprocess.CompletedProcess:
