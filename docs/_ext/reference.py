@@ -4,6 +4,8 @@
   the same declarations ``sph options`` prints (:func:`sphcore.plugin.pluginhost.option_tables`:
   the core's and every installed plugin's).
 - ``reference/cli.md``: ``sph --help`` and each command's help, as the parser prints them.
+- ``reference/cases.md``: the shipped cases, from each ``cases/*/case.toml`` (its
+  ``[case]`` description, dimension, plugins and simulated time).
 - ``reference/output_files.md``: the files a run writes, with each netCDF variable's
   dimensions, units and meaning, read from the files of two small runs made at build time
   (a dam break with every writer, a swaying tank with wall loads). A file that a run writes
@@ -197,6 +199,31 @@ def cli() -> str:
     return "\n".join(lines)
 
 
+def cases(root: Path) -> str:
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+
+    lines = [
+        "# Cases",
+        "",
+        "The case directories shipped in `cases/`, each run with `sph run cases/<name>`; each",
+        "directory's README says what the case reproduces, how long it takes and how to read",
+        "its output. Copy one to start a case of your own.",
+        "",
+        "| case | dim | description | plugins | simulated time |",
+        "|---|---|---|---|---|",
+    ]
+    for toml in sorted((root / "cases").glob("*/case.toml")):
+        case = tomllib.loads(toml.read_text())
+        info, plugins = case.get("case", {}), case.get("plugins", {}).get("use", [])
+        t_end = case.get("time", {}).get("t_end")
+        lines.append(f"| `{toml.parent.name}` | {info.get('dim', '')} | {info.get('description', '')} | "
+                     f"{', '.join(f'`{p}`' for p in plugins)} | {'' if t_end is None else f'{t_end:g} s'} |")
+    return "\n".join(lines + [""])
+
+
 def _write(path: Path, text: str) -> None:
     if not path.exists() or path.read_text() != text:  # an unchanged page keeps its time: no rebuild
         path.write_text(text)
@@ -207,6 +234,7 @@ def generate(app) -> None:
     out = docs / "reference"
     _write(out / "case_keys.md", case_keys())
     _write(out / "cli.md", cli())
+    _write(out / "cases.md", cases(docs.parent))
     _write(out / "output_files.md", output_files(docs.parent))
 
 
