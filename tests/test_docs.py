@@ -51,6 +51,21 @@ def test_the_work_log_pattern_finds_what_it_should_and_nothing_else():
     assert not WORK_LOG.search("the issue is the kernel width") and not WORK_LOG.search("dx = 2026.5")
 
 
+#: a path into the documentation named in the tree's text
+DOCS_PATH = re.compile(r"\bdocs/[\w/.-]*\w\.(?:md|png|gif|py)\b")
+
+
+def test_every_documentation_page_the_tree_names_exists():
+    """A docstring, comment, README or case file that points at a page points at one that is
+    there: a page renamed or removed leaves no reference behind."""
+    missing = []
+    for rel, path in _sources():
+        for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+            missing += [f"{rel}:{n}: {m}" for m in DOCS_PATH.findall(line) if not (ROOT / m).exists()
+                        and not m.startswith("docs/reference/")]  # reference pages are written at build time
+    assert not missing, "pointers to pages that are not there:\n" + "\n".join(missing)
+
+
 def test_the_readme_is_a_front_page_with_two_quick_start_commands():
     text = (ROOT / "README.md").read_text()
     assert len(text.splitlines()) <= 120

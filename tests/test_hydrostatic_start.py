@@ -66,7 +66,7 @@ def test_a_tank_at_rest_starts_in_the_discrete_equilibrium(tmp_path, h_over_dx):
     (the columns along the side walls included) and 1e-4 g within it (the wall tables'
     interpolation in the wall distances), and none is pushed sideways by more than 5e-5 g. With a start
     of equal masses the deep rows drifted by up to 0.014 g and the wall columns
-    differed by 0.004 g (docs/wall_pressure.md)."""
+    differed by 0.004 g (docs/validation/hydrostatic_tank.md)."""
     case, pm = runner.load(write_case(tmp_path / "tank", tank(h_over_dx)))
     sim = build(case, pm)
     sim.integrator.rates()

@@ -49,7 +49,7 @@ def test_a_relaxed_tank_stays_at_rest_where_the_lattice_slides(tmp_path):
     by 0.044 dx: an equilibrium of the scheme, not only of the continuum. The issue's
     displacement target (0.1 dx) holds for the relaxed start only. (Its pressure does not
     meet 2 %: 4.9 % on this tank, measured, in the layers under the free surface;
-    docs/wall_pressure.md, "A relaxed start".) The relaxation had nearly come to rest: its
+    docs/validation/hydrostatic_tank.md.) The relaxation had nearly come to rest: its
     last speed 0.0008 m/s (measured; 0.021 m/s where it does not settle, at h = 1.3 dx)."""
     dx = 0.02
     lattice = run_tank(tmp_path, "lattice")
@@ -186,7 +186,7 @@ def test_the_wall_model_pulls_the_top_corners_of_the_ghosts_equilibrium(tmp_path
     own relaxed state is (nearly) at rest under the ghosts, while the wall model pulls its
     top corner particles towards the side wall (measured: -0.04 to -0.09 g on the 50 x 50
     tank) and leaves the middle column alone: the two boundaries disagree where the free
-    surface meets a wall (docs/wall_pressure.md, "What drives the layer alternation")."""
+    surface meets a wall (docs/explanation/density_diffusion.md)."""
     mod = script("tank_cross_start")
     case_dir = write_case(tmp_path / "tank", TANK)
     own, columns, moved_own, _, _ = mod.cross_start(case_dir, "ghost", "ghost", 2.0, 3.0, 0.01)

@@ -3,7 +3,7 @@ whether its rest state is stable.
 
 Plain Tait pressure, hydrostatic start, a 20 x 20 block (0.4 m x 0.4 m, dx = 0.02 m); the
 known answers are the quarter-wave acoustic mode pi c0 / (2 H) and the first sloshing mode
-sqrt(g k tanh(k H)), k = pi / L (docs/wall_pressure.md, "The tank at rest, linearised")."""
+sqrt(g k tanh(k H)), k = pi / L (docs/validation/hydrostatic_tank.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """postprocessing/spheric_test2.py scores the experiment against itself as perfect, and its
-impulse is the integral it claims (the script is what docs/walls.md quotes)."""
+impulse is the integral it claims (the script is what docs/validation/spheric_test2.md quotes)."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Short versions of the paper's validation cases, asserting physics.
 
 The full validations (0.3 s dam break, 5 s tank, every boundary) run by hand:
-``python postprocessing/validate.py``.
+``python validation/build.py`` (docs/validation/).
 """
 
 from __future__ import annotations
@@ -125,7 +125,7 @@ def test_v_tank_sloped_walls_hold_every_particle():
 
 
 def test_time_step_past_the_stability_limit_is_caught_by_energy_growth():
-    """cfl = 0.6 (the leapfrog's limit lies between 0.45 and 0.5, docs/speed_accuracy.md)
+    """cfl = 0.6 (the leapfrog's limit lies between 0.45 and 0.5, docs/explanation/time_integration.md)
     runs without NaN or density out of bounds for a long time while the field is already
     garbage; the energy check stops it within the first 0.01 s. At the default cfl = 0.3 the
     energy stays two orders of magnitude below the threshold."""

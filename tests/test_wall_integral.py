@@ -2,7 +2,7 @@
 
 Known answers: a uniform pressure pushes no particle anywhere (its own pressure is balanced
 by the wall's); water at rest with plain Tait pressure stays hydrostatic to a few per cent
-where the reflective walls alone leave it 40% off (measured figures are in docs/wall_pressure.md).
+where the reflective walls alone leave it 40% off (measured figures are in docs/validation/hydrostatic_tank.md).
 """
 
 from __future__ import annotations
@@ -178,7 +178,7 @@ def test_a_stagnation_flow_changes_the_density_only_where_the_kernel_is_truncate
     is -(M_tt - M_nn) at a layer whose support the floor truncates, M the layer's second
     moment sum_j V_j (x_j - x_i) (x) grad_i W_ij (an independent brute-force sum here), and
     0 to round-off where the support is whole. This is the floor layer's spurious
-    compression or expansion of docs/wall_pressure.md ("The floor layer's excess")."""
+    compression or expansion next to the floor (docs/explanation/wall_model.md)."""
     from sphcore.physics.kernels import WENDLAND_C2, kernel_f
 
     dx, hdx, side = 0.02, 1.3, 0.3

@@ -174,7 +174,7 @@ def test_the_wall_model_holds_a_tank_with_a_step_at_rest(tmp_path):
     # water 1 m deep at rest over a box step 0.2 m high on the floor, plain Tait pressure
     # (no modified pressure), delta = 0.1: with the wall model on planes and faces the
     # hydrostatic pressure holds to 3.2 % and no particle moves a grid spacing in 1 s
-    # (measured; reflective walls alone: 49 % and 5.6 dx, docs/walls.md)
+    # (measured; reflective walls alone: 49 % and 5.6 dx)
     case = walls_case({"shape": "box", "min": [0.4, 0.0], "max": [0.6, 0.2]},
                       domain={"min": [0.0, 0.0], "max": [1.0, 1.2]}, bmin=[0.0, 0.0], bmax=[1.0, 1.0],
                       t_end=1.0, plugins=["reflective", "wall_integral", "pressure_gauge"])
