@@ -66,6 +66,18 @@ def test_every_documentation_page_the_tree_names_exists():
     assert not missing, "pointers to pages that are not there:\n" + "\n".join(missing)
 
 
+def test_every_script_the_documentation_runs_exists():
+    """``python some/script.py`` in a page or the README names a script of the tree."""
+    missing = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]:
+        if "_build" in page.parts:
+            continue
+        for n, line in enumerate(page.read_text().splitlines(), 1):
+            missing += [f"{page.relative_to(ROOT)}:{n}: {script}"
+                        for script in re.findall(r"python3? ([\w/.-]+\.py)\b", line) if not (ROOT / script).is_file()]
+    assert not missing, "scripts that are not there:\n" + "\n".join(missing)
+
+
 def test_the_readme_is_a_front_page_with_two_quick_start_commands():
     text = (ROOT / "README.md").read_text()
     assert len(text.splitlines()) <= 120
