@@ -6,6 +6,7 @@ a subprocess, as a user runs them (``python postprocessing/X.py``)."""
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import subprocess
 import sys
@@ -19,8 +20,12 @@ from sphcore.testing import case_with, run_case
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTS = ROOT / "postprocessing"
 TOOLKIT = ["wavefront.py", "pressure_profile.py", "probes.py", "spheric_test2.py", "peer_series.py", "sloshing.py",
-           "wave_flume.py"]
-STUDIES = sorted(p.relative_to(ROOT) for p in (ROOT / "validation").rglob("*.py"))
+           "wave_flume.py", "render.py"]
+# the validation scripts a user runs (validation/build.py and the studies validation/<case>/*.py);
+# validation/pages/ holds the build's page modules, not scripts, and validation/runs/ its runs
+STUDIES = sorted(p.relative_to(ROOT) for p in (ROOT / "validation").rglob("*.py")
+                 if p.relative_to(ROOT / "validation").parts[0] not in ("pages", "runs"))
+PAGES = sorted((ROOT / "validation" / "pages").glob("*.py"))
 RHO_G = 1000.0 * 9.81
 
 TANK = {
@@ -97,6 +102,21 @@ def test_every_study_answers_help(path):
     """The studies import what they use (sphcore's in-process API, the gauges)."""
     res = subprocess.run([sys.executable, str(ROOT / path), "--help"], capture_output=True, text=True, check=False)
     assert res.returncode == 0 and res.stdout.startswith(f"usage: {path.name} "), res.stderr
+
+
+def test_every_validation_page_module_defines_the_build_interface():
+    """validation/build.py's contract with a page module: NAME (the file's name), TITLE and
+    build(runs, figures, rerun), and a page docs/validation/<NAME>.md that includes the table
+    the build writes. Loading the modules runs nothing."""
+    spec = importlib.util.spec_from_file_location("validation_build", ROOT / "validation" / "build.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    pages = build.discover()
+    assert sorted(pages) == sorted(p.stem for p in PAGES if not p.name.startswith("_"))
+    for name, mod in pages.items():
+        assert callable(mod.build) and mod.TITLE, name
+        page = ROOT / "docs" / "validation" / f"{name}.md"
+        assert page.is_file() and f"tables/{name}.md" in page.read_text(), page
 
 
 def test_no_script_edits_sys_path_or_guesses_its_imports():

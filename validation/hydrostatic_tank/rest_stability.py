@@ -35,15 +35,15 @@ amplitude, default 1e-3 dx here); the linearisation and the run start from that 
 the run's displacements are measured from it. The line ``relaxed``
 gives the largest move from the lattice (dx), the largest speed before the stop and the
 worst layer's pressure error below the top two (``pressure_gauge``'s definition). What it
-shows (docs/wall_pressure.md, "A relaxed start"): at h = 1.5 dx an unstable lattice settles
+shows: at h = 1.5 dx an unstable lattice settles
 into a nearby arrangement whose growth is slower (wall model 2.23 -> 1.27 1/s), at 1.3 dx
 none is found nearby, and with the wall model the layers under the free surface keep their
 error (a zigzag made at the top corners). ``--no-modes`` skips the linearisation (its dense matrix grows as the
 square of the particle count: use it for the full 1 m tank's run, ``--size 1.0 1.0``).
 
 Figures are printed, never asserted (``tests/test_rest_linearised.py`` asserts the known
-answers); docs/wall_pressure.md ("The tank at rest, linearised") has a table from this
-script.
+answers); the validation page "The tank at rest" (docs/validation/hydrostatic_tank.md)
+cites its growth rates.
 """
 
 from __future__ import annotations

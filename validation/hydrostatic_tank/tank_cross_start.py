@@ -18,8 +18,8 @@ not have). Prints
   (the layer mean against rho0 g (H - y), in % of the hydrostatic pressure, as the
   ``pressure_gauge`` plugin measures it).
 
-docs/wall_pressure.md ("What drives the layer alternation") shows what it found for the
-wall model against the ghosts.
+The validation page "The tank at rest" (docs/validation/hydrostatic_tank.md) cites what it
+finds for the wall model against the ghosts.
 """
 
 from __future__ import annotations

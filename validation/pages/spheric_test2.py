@@ -1,0 +1,95 @@
+"""SPHERIC test 2 (Kleefsman et al. 2005): the 3D dam break against a box, each wall treatment.
+
+Runs ``cases/dam_break_obstacle_3d`` as shipped (dx = 0.02 m, 85,400 particles, 2 s) with
+the probes plugin alone for output, with the reflective walls and with reflective walls +
+the wall model (``wall_integral``); ghost particles do not apply (they mirror the fluid
+across an infinite plane, and the box is a finite solid standing in the flow). Compares the
+water depths H1-H4 and the pressures P1-P4 with the experiment through
+``postprocessing/spheric_test2.py`` (its definitions: depth RMS over the run, first impact
+at p > 2 kPa, peak and impulse over the 0.2 s after it).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from _common import REFLECTIVE, TREATMENTS, WALL_MODEL, cost, num, pct, plugins_set, pyplot, run_case, save, \
+    status, table, toolkit
+
+NAME = "spheric_test2"
+TITLE = "SPHERIC test 2: 3D dam break against a box, depths H1-H4 and pressure P1 vs Kleefsman et al. (2005)"
+CASE = "dam_break_obstacle_3d"
+ROWS = (REFLECTIVE, WALL_MODEL)  # ghosts: no finite obstacle
+
+
+def build(runs: Path, figures: Path, rerun: bool) -> str:
+    from sphcore_plugins.gauges.reference import kleefsman
+
+    st2, open_run = toolkit("spheric_test2"), toolkit("runs").open_run
+    exp = kleefsman()
+    results = {}
+    for label in ROWS:
+        out = runs / "_".join(TREATMENTS[label])
+        s = run_case(CASE, out, [plugins_set(TREATMENTS[label] + ["probes"])], rerun=rerun)
+        probes = open_run(out).probe_table() if s["status"] == "completed" else None
+        res = st2.compare(probes, exp, None) if probes is not None else {}
+        results[label] = (s, probes, res)
+    _plots(results, exp, figures)
+    rows_h, rows_p = [], []
+    for label, (s, _, r) in results.items():
+        rows_h.append([label, status(s), *[num(r.get(f"{h}_rms_m")) for h in st2.DEPTHS],
+                       *[_front(r, h) for h in ("H1", "H2", "H3")],
+                       *cost(s)])
+        p1 = r.get("P1", {})
+        rows_p.append([label, num(p1.get("arrival_error_s") * 1000 if p1 else None, 2),
+                       num(p1.get("peak_Pa")), pct(p1.get("peak_error"), digits=0),
+                       num(p1.get("mean_peak_Pa")), num(p1.get("impulse_Pa_s")), num(p1.get("impulse_ratio")),
+                       str(s.get("n_particles", "-")), num(s.get("c0"))])
+    p1_exp = next((r["P1"] for _, _, r in results.values() if "P1" in r), {})
+    md = "Water depth: RMS error over the run (m) and the front's arrival at H1-H3 (depth > 0.05 m) "
+    md += "against the experiment's (s, + late).\n\n"
+    md += table(["walls", "status", "H1 RMS", "H2 RMS", "H3 RMS", "H4 RMS",
+                 "H1 arrival", "H2 arrival", "H3 arrival", "wall s", "particle-steps/s"], rows_h)
+    md += ("\nPressure P1 (the lowest sensor on the box's face), first impact: arrival error (ms), peak (Pa) and "
+           f"its error, peak of the 10 ms running mean (Pa), impulse over the {num(p1_exp.get('window_s'))} s after "
+           f"the impact (Pa s) and its ratio to the experiment's. Experiment: peak {num(p1_exp.get('peak_exp_Pa'))} "
+           f"Pa, 10 ms mean peak {num(p1_exp.get('mean_peak_exp_Pa'))} Pa, impulse "
+           f"{num(p1_exp.get('impulse_exp_Pa_s'))} Pa s.\n\n")
+    md += table(["walls", "arrival (ms)", "peak (Pa)", "peak error", "10 ms mean peak (Pa)", "impulse (Pa s)",
+                 "impulse ratio", "particles", "c0 (m/s)"], rows_p)
+    return md
+
+
+def _front(r: dict, h: str) -> str:
+    """The run's arrival at ``h`` (depth > 0.05 m) minus the experiment's (s)."""
+    fronts = {d: a - b for d, a, b in r.get(f"{h}_front", ())}
+    return "-" if 0.05 not in fronts else f"{fronts[0.05]:+.3f}"
+
+
+def _plots(results, exp, figures: Path):
+    plt = pyplot()
+    t1 = max((float(p["time"][-1]) for _, p, _ in results.values() if p is not None), default=2.0)
+    keep = exp["t"] <= t1
+    fig, axes = plt.subplots(4, 1, figsize=(7, 8), sharex=True)
+    for k, ax in enumerate(axes):
+        name = f"H{k + 1}"
+        ax.plot(exp["t"][keep], exp[name][keep], color="0.3", lw=1.2, label="Kleefsman et al. 2005")
+        for i, (label, (_, p, _)) in enumerate(results.items()):
+            if p is not None and name in p:
+                ax.plot(p["time"], p[name], color=f"C{i}", lw=0.9, label=f"sphcore, {label}")
+        ax.set_ylabel(f"{name} (m)")
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("t (s)")
+    fig.tight_layout()
+    save(fig, figures, f"{NAME}_depths.png")
+    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for ax, name in zip(axes, ("P1", "P3")):
+        ax.plot(exp["t"][keep], exp[name][keep], color="0.3", lw=1.2, label="Kleefsman et al. 2005")
+        for i, (label, (_, p, _)) in enumerate(results.items()):
+            if p is not None and name in p:
+                ax.plot(p["time"], p[name], color=f"C{i}", lw=0.7, label=f"sphcore, {label}")
+        ax.set_ylabel(f"{name} (Pa)")
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("t (s)")
+    fig.tight_layout()
+    save(fig, figures, f"{NAME}_pressures.png")
