@@ -180,7 +180,7 @@ def test_sweep_refuses_an_output_that_is_a_file_and_a_scheduler_that_is_not_an_a
 
 # -- post-processing --------------------------------------------------------------------
 
-SCRIPTS = ["peer_series", "pressure_profile", "probes", "spheric_test2", "wavefront"]
+SCRIPTS = ["peer_series", "pressure_profile", "probes", "render", "spheric_test2", "wavefront"]
 
 
 def _run_script(name, *argv):
