@@ -25,10 +25,12 @@ comes from the runs. A page runs its cases through ``validation/pages/_common.py
 (``run_case``: ``sph run`` as a subprocess), which reuses a run when its folder holds a
 finished run (``summary.json`` says completed, or unstable, which a rerun would repeat)
 made by the same ``sph run`` command from the same case files (a stamp of the command line
-and of the SHA-256 of the case folder, written beside ``summary.json``); ``--rerun`` runs
-everything again. With the runs in place, a build only redraws the figures and tables.
+and of the SHA-256 of the case folder, ``<run folder>.stamp.json``, written before the run
+starts); a run stopped by a signal (Ctrl-C on the build) continues from its checkpoint with
+``sph run --restart``; ``--rerun`` runs everything again. With the runs in place, a build
+only redraws the figures and tables.
 
-``--only NAME`` builds those pages alone (repeatable); ``--runs DIR`` keeps the runs in
+``--only NAME ...`` builds those pages alone; ``--runs DIR`` keeps the runs in
 ``DIR`` instead of ``validation/runs/`` (ignored by git). The build prints each page's wall
 time and the total. Run it with one Numba thread per run and one run at a time (the pages
 run their cases one after the other) to get the wall times quoted on the pages:
@@ -79,7 +81,7 @@ def discover() -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--only", action="append", metavar="NAME", help="build this page only (repeatable)")
+    ap.add_argument("--only", nargs="+", action="extend", metavar="NAME", help="build these pages only")
     ap.add_argument("--rerun", action="store_true", help="run every case again, even where a finished run is there")
     ap.add_argument("--runs", type=Path, default=HERE / "runs", help="where the runs are kept (default validation/runs)")
     args = ap.parse_args(argv)

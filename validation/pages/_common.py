@@ -22,8 +22,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]  # the repository
 CASES = ROOT / "cases"
 POSTPROCESSING = ROOT / "postprocessing"
-STAMP = "validation_stamp.json"  # beside summary.json: what the run was made from
-FINISHED = ("completed", "unstable")  # a run that ended by itself; "stopped"/"failed" runs again
+STAMP = ".stamp.json"  # <run folder>.stamp.json, beside the run folder: what the run is made from
+FINISHED = ("completed", "unstable")  # a run that ended by itself; "failed" runs again
+STOPPED = "stopped"  # stopped by a signal (Ctrl-C): continued from its checkpoint with --restart
 DPI = 80  # figures' resolution: a 6 x 4 inch plot is ~50 KB
 
 # the boundary treatments the pages compare: label -> the wall plugins (before the case's gauges)
@@ -68,43 +69,57 @@ def read_summary(out: Path) -> dict | None:
         return None
 
 
+def stamp_file(out: Path) -> Path:
+    """Where the stamp of the run in ``out`` is kept: beside the folder (sph writes only into
+    an empty folder or one it wrote), written before the run starts."""
+    return out.with_name(out.name + STAMP)
+
+
 def reusable(out: Path, want: dict) -> dict | None:
-    """The summary of the run in ``out`` if it finished (completed, or stopped by an
-    instability, which a rerun would repeat) and was made from ``want``; else None."""
+    """The summary of the run in ``out`` if it was made from ``want`` (its stamp) and ended
+    (completed, or stopped by an instability, which a rerun would repeat), or was stopped by
+    a signal with a checkpoint to continue from; else None."""
     s = read_summary(out)
     try:
-        have = json.loads((out / STAMP).read_text())
+        have = json.loads(stamp_file(out).read_text())
     except (OSError, ValueError):
         return None
-    if s is None or s.get("status") not in FINISHED or have != want:
+    if s is None or have != want:
         return None
-    return s
+    if s.get("status") in FINISHED or (s.get("status") == STOPPED and (out / "checkpoint.npz").exists()):
+        return s
+    return None
 
 
 def run_case(case: str, out: Path, sets: list[str] = (), t_end: float | None = None, rerun: bool = False) -> dict:
-    """Run ``cases/<case>`` into ``out`` with ``sph run --set ...`` (or reuse the run there);
-    its summary, with ``"reused": True`` when nothing was run. Prints one line per run."""
+    """Run ``cases/<case>`` into ``out`` with ``sph run --set ...`` and return its summary, with
+    ``"reused": True`` when nothing was run. A run made by the same command from the same
+    case files is reused if it ended, continued with ``--restart`` if it was stopped (Ctrl-C
+    on the build stops the run at a checkpoint), and run again otherwise or with ``rerun``."""
     case_dir = CASES / case
     args = [a for s in sets for a in ("--set", s)]
     if t_end is not None:
         args += ["--t-end", repr(float(t_end))]
     want = stamp(case_dir, args)
     s = None if rerun else reusable(out, want)
-    if s is not None:
+    if s is not None and s["status"] != STOPPED:
         print(f"  {out.name}: reused ({s['status']}, {s['wall_time_s']:.0f} s when run)", flush=True)
         return {**s, "reused": True}
-    if out.exists():
-        shutil.rmtree(out)  # the runs folder is the build's own: a stale or partial run goes
-    out.parent.mkdir(parents=True, exist_ok=True)
+    restart = s is not None
+    if not restart:
+        if out.exists():
+            shutil.rmtree(out)  # the runs folder is the build's own: a stale or partial run goes
+        out.parent.mkdir(parents=True, exist_ok=True)
+        stamp_file(out).write_text(json.dumps(want, indent=1) + "\n")
     cmd = [sys.executable, "-m", "sphcore.cli", "run", str(case_dir), "--output", str(out),
-           "--progress", "off", *args]
+           "--progress", "off", *args, *(["--restart"] if restart else [])]
     t0 = time.perf_counter()
     p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     s = read_summary(out)
     if s is None:
         raise RuntimeError(f"sph run {case} wrote no summary.json (exit {p.returncode}):\n{p.stderr[-2000:]}")
-    (out / STAMP).write_text(json.dumps(want, indent=1) + "\n")
-    print(f"  {out.name}: {s['status']} in {time.perf_counter() - t0:.0f} s", flush=True)
+    print(f"  {out.name}: {s['status']}{' (continued)' if restart else ''} in {time.perf_counter() - t0:.0f} s",
+          flush=True)
     return {**s, "reused": False}
 
 
