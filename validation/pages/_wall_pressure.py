@@ -38,7 +38,7 @@ def plot_probe(results: dict, name: str, figures: Path, png: str, title: str) ->
         ref, height = probe["reference"], probe["H"]
         series, exp = reference.SERIES[ref], reference.series(ref)
         if series.kind == "lobovsky":
-            ax.fill_between(exp[:, 0], exp[:, 1], exp[:, 3], color="0.8", label=f"{series.label} (2.5-97.5 %)")
+            ax.fill_between(exp[:, 0], exp[:, 1], exp[:, 3], color="0.8", label=series.label)
             ax.plot(exp[:, 0], exp[:, 2], "k-", lw=0.8, label="experiment, median")
         else:
             ax.plot(exp[:, 0], exp[:, 1], "ko", ms=2.5, mfc="none", label=series.label)

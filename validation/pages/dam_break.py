@@ -77,6 +77,7 @@ def _plot(results: dict, figures: Path):
     ax.set_xlabel("T = t sqrt(2g/a)")
     ax.set_ylabel("Z = x_front / a")
     ax.set_xlim(0, 3.5)
+    bx.set_xlim(0, 3.5)
     ax.set_ylim(1, 4)
     bx.set_xlabel("tau = t sqrt(g/a)")
     bx.set_ylabel("H = eta / (2a) at the back wall")

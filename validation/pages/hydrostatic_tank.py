@@ -74,10 +74,15 @@ def _plot(profiles: dict, figures: Path):
                 keep = y < H - 2 * dx  # the top two layers: the criterion leaves them out
                 ax.plot(100 * err[keep], y[keep], "o-", ms=2.5, lw=0.8, color=f"C{i}", label=label)
         ax.axvline(0.0, color="k", lw=0.8)
+        worst = max((float(np.nanmax(np.abs(profiles[(form, lb)][1]))) for lb in TREATMENTS if (form, lb) in profiles),
+                    default=0.0)
+        if worst < 1e-6:  # round-off: a scale of its own would only show the noise of the last digit
+            ax.set_xlim(-1.0, 1.0)
+            ax.text(0.05, 0.02, f"every layer within {100 * worst:.0e} %", transform=ax.transAxes, fontsize=8)
         ax.set_title(f"{form}, t = {T_END:g} s", fontsize=9)
         ax.set_xlabel("layer mean pressure error vs rho0 g (H - y) (%)")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("y (m)")
-    axes[0].legend(fontsize=8)
+    axes[1].legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     save(fig, figures, f"{NAME}_layers.png")
