@@ -8,9 +8,9 @@ The convention the pages follow (docs/tutorial/*.md, docs/howto/*.md, every page
   output as the page shows it. Each shown line must appear in what the command prints
   (stdout and stderr together) as a whole line, in the same order; other lines may come
   between them (a progress line, a compile notice). Text must match exactly (runs of
-  blanks count as one),
-  numbers within 5 % (1e-4 absolute); ``...`` stands for any text. Wall time, rates and
-  memory (a number followed by ``s wall``, ``particle-steps/s`` or ``MB``) are not compared.
+  blanks count as one), numbers within 5 % (1e-4 absolute); ``...`` stands for any text.
+  Wall time, rates and memory (a number followed by ``s wall``, ``particle-steps/s`` or
+  ``MB``) are not compared.
 - A fenced block of another language whose first line is ``# file: PATH`` is a file the
   page has the reader write (a case.toml): it is written there, relative to the
   repository's root, before the commands after it run.
@@ -190,8 +190,10 @@ def _not_run(cmd: Command) -> str | None:
 
 def _local_package(cmd: Command, cwd: Path) -> Path | None:
     """The folder of ``pip install [-e] ./path`` when it is a local package with a pyproject.toml."""
+    if _not_run(cmd) != "install":
+        return None
     words = [w for w in shlex.split(cmd.text) if w not in ("-e", "--editable")]
-    if len(words) >= 3 and _not_run(cmd) == "install":
+    if len(words) >= 3:
         path = cwd / words[-1]
         if (path / "pyproject.toml").is_file():
             return path
