@@ -45,7 +45,7 @@ class WallLoadsWriter(ScheduledWriter):
     """Pluggy plugin ``wall_loads``: the moving walls' loads on the ``[wall_loads]`` schedule."""
 
     table = TABLE
-    what = "row of wall loads"
+    what = "wall-loads row"
 
     def __init__(self):
         super().__init__()
