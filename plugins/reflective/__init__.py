@@ -180,7 +180,7 @@ class ReflectivePlugin:
                                                            ctx.state.radius, self.response, tally, self.scratch,
                                                            ctx.state.m, loads)
             for name, (impulse, angular) in loads.items():
-                ctx.add_wall_load(name, impulse, angular)
+                ctx.add_contact_impulse(name, impulse, angular)
             stats = ctx.stats(self)
             stats["pinched"] = stats.get("pinched", 0) + pinched
         # ctx.stats: in summary.json under "reflective" and in every checkpoint, so the

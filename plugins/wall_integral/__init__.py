@@ -159,6 +159,8 @@ class WallIntegralPlugin:
                 if g.name in loads:  # the tank's walls: its planes and faces together
                     force, moment = force + loads[g.name][0], moment + loads[g.name][1]
                 loads[g.name] = (force, moment)
+        for name, (force, moment) in loads.items():
+            ctx.set_wall_force(name, force, moment)
         if self.plane_groups or self.face_groups:  # kept for the next step's load (restart too)
             ctx.kept(self)["loads"] = {name: [float(v) for v in f] + [float(v) for v in m]
                                        for name, (f, m) in loads.items()}

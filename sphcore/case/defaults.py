@@ -24,6 +24,9 @@ CORE: dict[str, dict[str, O]] = {
                     "and the walls with tank = true): parts that add up (keys: sphcore.case.motion.PART); none: the "
                     "tank is fixed"),
     },
+    # [[bodies]] is an array of tables; each entry is checked against BODY below.
+    "bodies": O([], "table_list", doc="floating bodies: finite walls moved by the fluid's loads, gravity and "
+                "springs (keys: BODY)"),
     # [[blocks]] is an array of tables; each entry is checked against BLOCK below.
     "blocks": O([], "table_list", doc="particle blocks filled on a lattice of spacing dx"),
     "particles": {
@@ -157,6 +160,39 @@ WALL: dict[str, O] = {
     "tank": O(False, "bool", doc="the wall moves with the tank ([[domain.motion]])"),
     "motion": O([], "table_list", doc="prescribed motion of this wall alone: parts that add up (keys: "
                 "sphcore.case.motion.PART); none: fixed (or moving with the tank)"),
+}
+
+#: keys of one ``[[bodies]]`` entry: a closed finite wall that the fluid moves
+BODY: dict[str, O] = {
+    "wall": O(None, "int", doc="index of the closed [[domain.walls]] entry (box, polygon or mesh) that is the "
+              "body's surface (required)", min=0, nullable=True),
+    "density": O(None, "float", "kg/m^3", "uniform density of the body (or give mass)", positive=True, nullable=True),
+    "mass": O(None, "float", "kg", "the body's mass (2D: per metre of span), the density then uniform",
+              positive=True, nullable=True),
+    "velocity": O(None, "vector", "m/s", "initial velocity of the centre of mass; zero when unset", nullable=True),
+    "angular_velocity": O(None, "vector", "rad/s", "initial angular velocity (2D: [wz]; 3D: [wx, wy, wz]); "
+                          "zero when unset", nullable=True),
+    "free": O(None, "str_list", doc="the world axes the centre of mass may move along, e.g. [\"y\"] (heave only "
+              "in 2D); all when unset", nullable=True),
+    "rotation": O("free", "str", doc="free, fixed (translation only) or hinge (turns about hinge_axis through "
+                  "hinge_point, nothing else)", choices=("free", "fixed", "hinge")),
+    "hinge_point": O(None, "vector", "m", "hinge: a point of the hinge's axis", nullable=True),
+    "hinge_axis": O(None, "vector", doc="hinge in 3D: the axis' direction (2D: about z)", nullable=True),
+    "restitution": O(0.5, "float", doc="coefficient of restitution of the body's contacts with the fixed walls "
+                     "(0: plastic, 1: elastic)", min=0.0, extra={"max": 1.0}),
+    "springs": O([], "table_list", doc="linear springs and dashpots to fixed anchors, a simple mooring (keys: "
+                 "SPRING)"),
+}
+
+#: keys of one ``[[bodies.springs]]`` entry
+SPRING: dict[str, O] = {
+    "anchor": O(None, "vector", "m", "the fixed end (required)", nullable=True),
+    "attach": O(None, "vector", "m", "the body's end, a point of the body where case.toml draws it; the centre of "
+                "mass when unset", nullable=True),
+    "stiffness": O(None, "float", "N/m", "spring constant (2D: N/m per metre of span) (required)", min=0.0,
+                   nullable=True),
+    "damping": O(0.0, "float", "N s/m", "dashpot constant along the spring", min=0.0),
+    "rest_length": O(0.0, "float", "m", "length of the unloaded spring", min=0.0),
 }
 
 #: keys of one ``[[domain.planes]]`` entry

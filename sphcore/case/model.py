@@ -19,6 +19,7 @@ except ModuleNotFoundError:  # Python < 3.11
 import numpy as np
 
 from sphcore.case import defaults
+from sphcore.case.bodies import parse_bodies
 from sphcore.case.options import check_value, validate_table
 from sphcore.case.overrides import fold, parse_set
 from sphcore.case.motion import parse_motion
@@ -249,6 +250,8 @@ def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
     tank = any(sign < 0 for _, _, sign in faces.groups)
     planes = _planes(file, cfg, dim, bounded_by_walls=tank)
     moving = _moving_groups(file, cfg, dim, ranges, faces, planes)
+    taken = {k for k, w in enumerate(cfg["domain"]["walls"]) if w.get("tank") or w.get("motion")}
+    moving = moving + tuple(parse_bodies(file, cfg, dim, ranges, faces, taken))
     blocks = _blocks(file, cfg, dim)
     restart_keys = frozenset(f"{table}.{key}" for table, schema in plugin_schemas.items()
                              for key, opt in schema.items() if opt.restart)

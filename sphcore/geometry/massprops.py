@@ -40,17 +40,7 @@ class MassProperties:
 def polygon(vertices: np.ndarray, density: float) -> MassProperties:
     """The mass properties of a closed polygon (n, 2) of uniform ``density`` (kg/m^3)."""
     p = np.asarray(vertices, float)
-    q = np.roll(p, -1, axis=0)
-    c = p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]
-    area = 0.5 * c.sum()
-    if area == 0.0:
-        raise ValueError("the polygon encloses no area")
-    centre = ((p + q) * c[:, None]).sum(axis=0) / (6.0 * area)
-    polar = (c * ((p * p).sum(1) + (p * q).sum(1) + (q * q).sum(1))).sum() / 12.0
-    sign = 1.0 if area > 0 else -1.0  # a clockwise polygon: every sum changes sign
-    area, polar = sign * area, sign * polar
-    inertia = density * (polar - area * float(centre @ centre))
-    return MassProperties(density * area, centre, np.array([[inertia]]), area)
+    return _segments(p, np.roll(p, -1, axis=0), density)
 
 
 def mesh(points: np.ndarray, triangles: np.ndarray, density: float) -> MassProperties:
@@ -84,3 +74,29 @@ def box(lo: np.ndarray, hi: np.ndarray, density: float) -> MassProperties:
     else:
         inertia = np.diag([m * (e[1] ** 2 + e[2] ** 2), m * (e[0] ** 2 + e[2] ** 2), m * (e[0] ** 2 + e[1] ** 2)]) / 12.0
     return MassProperties(m, 0.5 * (lo + hi), inertia, size)
+
+
+def of_faces(verts: np.ndarray, density: float) -> MassProperties:
+    """The mass properties of a closed wall given by its faces ``verts`` (nf, dim, dim):
+    segments in 2D (Green's theorem needs only each edge's ends, in any order of the
+    edges), triangles in 3D; either orientation."""
+    verts = np.asarray(verts, float)
+    if verts.shape[2] == 2:
+        return _segments(verts[:, 0], verts[:, 1], density)
+    points = verts.reshape(-1, 3)
+    return mesh(points, np.arange(len(points)).reshape(-1, 3), density)
+
+
+def _segments(p: np.ndarray, q: np.ndarray, density: float) -> MassProperties:
+    origin = 0.5 * (np.minimum(p.min(0), q.min(0)) + np.maximum(p.max(0), q.max(0)))
+    p, q = p - origin, q - origin
+    c = p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]
+    area = 0.5 * c.sum()
+    if area == 0.0:
+        raise ValueError("the wall encloses no area")
+    centre = ((p + q) * c[:, None]).sum(axis=0) / (6.0 * area)
+    polar = (c * ((p * p).sum(1) + (p * q).sum(1) + (q * q).sum(1))).sum() / 12.0
+    sign = 1.0 if area > 0 else -1.0
+    area, polar = sign * area, sign * polar
+    return MassProperties(density * area, centre + origin, np.array([[density * (polar - area * float(centre @ centre))]]),
+                          area)

@@ -144,7 +144,7 @@ class RigidBody:
         if self.rotation == "fixed":
             return np.zeros(3)
         if self.rotation == "hinge":
-            return self.L / self._hinge_inertia()
+            return self.L / self.hinge_inertia()
         if self.dim == 2:
             return np.array([0.0, 0.0, self.L[2] / self.inertia_ref[0, 0]])
         return np.linalg.solve(self.inertia_world(), self.L)
@@ -235,7 +235,7 @@ class RigidBody:
         self.quat = quat_mul(quat_axis_angle(axis, phi), self.quat)
         self.quat /= np.linalg.norm(self.quat)
 
-    def _hinge_inertia(self) -> float:
+    def hinge_inertia(self) -> float:
         """The moment of inertia about the hinge (parallel axis theorem)."""
         a, p = self.hinge.axis, self.hinge.pivot
         r = self.x - p

@@ -79,6 +79,11 @@ class RunContext:
         self._pressure = pressure
         self._plugin_name = plugin_name or (lambda plugin: type(plugin).__name__)
         self._names: dict[int, tuple] = {}  # id(plugin) -> (plugin, name): see _name_of
+        #: the fluid's force and moment on each moving group at the last evaluation of the
+        #: rates ({group: (F, M)}), from the plugins that give walls a pressure
+        self.wall_forces: dict[str, tuple] = {}
+        #: the contact impulses each moving group took during the current step
+        self.contact_impulses: dict[str, list] = {}
 
     # -- the run state, by name ---------------------------------------------------------
 
@@ -173,6 +178,23 @@ class RunContext:
         (reflective impulses, ghost or wall-model pressure forces times dt) add here; the
         ``wall_loads`` writer turns the sums into forces and moments. Kept across a restart."""
         acc = self.run.kept.setdefault("wall_impulses", {}).setdefault(group, [0.0] * 6)
+        for k, v in enumerate(impulse):
+            acc[k] += float(v)
+        for k, v in enumerate(angular_impulse):
+            acc[3 + k] += float(v)
+
+    def set_wall_force(self, group: str, force, moment) -> None:
+        """The fluid's force (N; N/m in 2D) and moment about the group's centre of rotation
+        where it is (N m; about z in 2D: the third component) on the moving group ``group``
+        at the rates just evaluated. A floating body takes it for its kicks; plugins whose
+        walls carry a pressure set it at each evaluation."""
+        self.wall_forces[group] = (np.asarray(force, float), np.asarray(moment, float))
+
+    def add_contact_impulse(self, group: str, impulse, angular_impulse) -> None:
+        """An impulse of the wall contacts of this step on ``group`` (N s, N m s): counted in
+        the group's load (:meth:`add_wall_load`) and given to a floating body at once."""
+        self.add_wall_load(group, impulse, angular_impulse)
+        acc = self.contact_impulses.setdefault(group, [0.0] * 6)
         for k, v in enumerate(impulse):
             acc[k] += float(v)
         for k, v in enumerate(angular_impulse):

@@ -66,6 +66,13 @@ class Simulation:
             f"off: plugin(s) {', '.join(working)} add accelerations and report no energy (sph_energy)" if working
             else f"off: walls move ({', '.join(moving)}) and do work on the fluid")
         self._energy_reference()
+        # floating bodies: wall groups whose motion the fluid's loads advance (not while relaxing:
+        # the relaxation settles the fluid around the bodies where case.toml draws them)
+        self.bodies = [] if relaxing else [(g.name, g.motion) for g in case.moving if hasattr(g.motion, "begin_step")]
+        kept = run.kept.get("bodies", {})
+        for name, motion in self.bodies:
+            if name in kept:
+                motion.restore(kept[name])
         # what a step does before it moves the particles, on step counts (sphcore.run.activities)
         cfg = case.config
         self.before_step = []
@@ -177,14 +184,26 @@ class Simulation:
             raise Instability(ctx.step, ctx.t, -1, f"time step {ctx.dt:.3g} s is below the round-off of t: "
                               "time cannot advance")
         integ, st = self.integrator, self.state
+        none = (np.zeros(3), np.zeros(3))
+        for name, body in self.bodies:  # half a kick and the drift: the walls at t + dt
+            body.begin_step(ctx.t, ctx.dt, *ctx.wall_forces.get(name, none))
+        ctx.contact_impulses.clear()
         integ.free_motion(ctx.dt)
         self.hooks.sph_after_integrate(ctx=ctx, pos0=integ.pos0, pos=st.pos, vel=st.vel, acc=integ.acc, dt=ctx.dt)
+        for name, body in self.bodies:  # what the walls' contacts took from the fluid
+            if name in ctx.contact_impulses:
+                j = ctx.contact_impulses[name]
+                body.impulse(j[:3], j[3:])
         # the particles are at t + dt now: so is the clock, so that the rates at the end of
         # the step (the leapfrog's) see moving walls where they are then
         ctx.t += ctx.dt
         self.update_pressure()
         if integ.finish(ctx.dt):  # the density changed again: its pressure too
             self.update_pressure()
+        if self.bodies:  # the other half kick, with the loads at t + dt
+            for name, body in self.bodies:
+                body.end_step(*ctx.wall_forces.get(name, none))
+            self.run.kept["bodies"] = {name: body.state() for name, body in self.bodies}
         ctx.step += 1
         if self.checks_due.due(self.run.clock):
             self.check()
