@@ -189,3 +189,33 @@ def test_a_pendulum_on_a_hinge_swings_at_its_period(dim):
     ups = np.nonzero((a[:-1] < 0) & (a[1:] >= 0))[0]
     period = (ups[-1] - ups[0]) * dt / (len(ups) - 1)
     assert period == pytest.approx(2 * np.pi * math.sqrt(ih / (m * g * d)), rel=2e-4)
+
+
+# -- contacts with the fixed walls ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("restitution", [0.0, 0.5, 1.0])
+def test_a_box_dropped_on_the_floor_stays_above_it_and_bounces_with_its_restitution(restitution):
+    """No fluid: a 2D box (0.2 x 0.1, heave only) falls 0.1 m onto the plane y = 0; its
+    vertices never end below the floor, and it leaves the first contact with -e times the
+    speed it hit at."""
+    from sphcore.geometry import massprops
+    from sphcore.physics.bodymotion import BodyMotion
+
+    props = massprops.box([0.4, 0.1], [0.6, 0.2], 500.0)
+    body = RigidBody(2, props.mass, props.centre, props.inertia, props.centre.copy(), np.zeros(2),
+                     free=[0.0, 1.0], rotation="fixed")
+    corners = np.array([[0.4, 0.1], [0.6, 0.1], [0.6, 0.2], [0.4, 0.2]])
+    floor = (np.array([[0.0, 1.0]]), np.array([[0.0, 0.0]]))
+    motion = BodyMotion(body, np.array([0.0, -9.81]), restitution, corners, floor)
+    dt, vs = 1e-4, []
+    for k in range(4000):
+        motion.begin_step(k * dt, dt, np.zeros(2), np.zeros(3))
+        motion.end_step(np.zeros(2), np.zeros(3))
+        assert body.x[1] - 0.05 >= -1e-12
+        vs.append(body.v[1])
+    hit = math.sqrt(2 * 9.81 * 0.1)
+    first = next(k for k in range(1, len(vs)) if vs[k] > vs[k - 1])  # the first contact's step
+    assert vs[first - 1] == pytest.approx(-hit, rel=2e-3)
+    assert vs[first] == pytest.approx(restitution * hit, rel=2e-3, abs=2 * 9.81 * dt)
+    assert motion.contacts >= 1

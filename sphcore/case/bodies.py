@@ -41,9 +41,10 @@ def _vector(file, key, value, n):
     return v
 
 
-def parse_bodies(file, cfg, dim, ranges, faces, taken) -> list[MovingGroup]:
+def parse_bodies(file, cfg, dim, ranges, faces, taken, planes) -> list[MovingGroup]:
     """The body groups of the case. ``ranges``: each wall's faces; ``taken``: the walls'
-    indices that already move (a prescribed motion or the tank's)."""
+    indices that already move (a prescribed motion or the tank's); ``planes``: the case's
+    planes, which the bodies' vertices stay inside."""
     groups, seen = [], set()
     gravity = np.asarray(cfg["physics"]["gravity"], float)[:dim]
     for k, entry in enumerate(cfg["bodies"]):
@@ -110,5 +111,7 @@ def parse_bodies(file, cfg, dim, ranges, faces, taken) -> list[MovingGroup]:
                 body.L = np.array([0.0, 0.0, props.inertia[0, 0] * w3[2]]) if dim == 2 else props.inertia @ w3
         reach = float(np.sqrt(((faces.verts[start:stop].reshape(-1, dim) - props.centre) ** 2).sum(1).max()))
         idx = np.arange(start, stop, dtype=np.int64)
-        groups.append(MovingGroup(key, BodyMotion(body, gravity, b["restitution"]), np.zeros(0, np.int64), idx, reach))
+        vertices = np.unique(faces.verts[start:stop].reshape(-1, dim), axis=0)
+        motion = BodyMotion(body, gravity, b["restitution"], vertices, (planes.normals, planes.points))
+        groups.append(MovingGroup(key, motion, np.zeros(0, np.int64), idx, reach))
     return groups

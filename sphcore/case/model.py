@@ -251,7 +251,7 @@ def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
     planes = _planes(file, cfg, dim, bounded_by_walls=tank)
     moving = _moving_groups(file, cfg, dim, ranges, faces, planes)
     taken = {k for k, w in enumerate(cfg["domain"]["walls"]) if w.get("tank") or w.get("motion")}
-    moving = moving + tuple(parse_bodies(file, cfg, dim, ranges, faces, taken))
+    moving = moving + tuple(parse_bodies(file, cfg, dim, ranges, faces, taken, planes))
     blocks = _blocks(file, cfg, dim)
     restart_keys = frozenset(f"{table}.{key}" for table, schema in plugin_schemas.items()
                              for key, opt in schema.items() if opt.restart)

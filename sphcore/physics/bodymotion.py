@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from sphcore.geometry.motion import Pose
-from sphcore.physics.rigid import RigidBody
+from sphcore.physics.rigid import RigidBody, cross3, cross_wr
 
 
 class BodyMotion:
@@ -34,9 +34,13 @@ class BodyMotion:
 
     t_last = math.inf
 
-    def __init__(self, body: RigidBody, gravity: np.ndarray, restitution: float = 0.5):
+    def __init__(self, body: RigidBody, gravity: np.ndarray, restitution: float = 0.5, vertices=None, planes=None):
         self.dim = body.dim
         self.restitution = restitution
+        #: the body's vertices (reference frame) and the fixed planes (normals, points) they stay inside
+        self.vertices = np.zeros((0, body.dim)) if vertices is None else np.asarray(vertices, float)
+        self.planes = planes
+        self.contacts = 0  # contacts with the fixed walls so far
         self.body = body
         self.gravity = np.asarray(gravity, float)[: body.dim]
         self.t0, self.dt = 0.0, 0.0
@@ -76,7 +80,52 @@ class BodyMotion:
         b.kick(F, T, 0.5 * dt)
         self._before = copy.deepcopy(b)
         b.drift(dt)
+        self._contact()
         self._end = self._now()
+
+    def _contact(self, sweeps: int = 4) -> None:
+        """Keep the body's vertices inside the fixed planes: for the deepest vertex past a
+        plane, an impulse along the plane's normal that reverses its normal velocity times
+        the restitution, 1/m_eff = 1/m + n . (I^-1 (r x n)) x r, and a shift back to
+        the plane (the body's free axes only)."""
+        if self.planes is None or not len(self.vertices):
+            return
+        b = self.body
+        normals, points = self.planes
+        for _ in range(sweeps):
+            R = b.R
+            x = b.x + (self.vertices - b.centre_ref) @ R.T
+            d = np.einsum("vpd,pd->vp", x[:, None, :] - points[None, :, :], normals)
+            v_idx, p_idx = np.unravel_index(np.argmin(d), d.shape)
+            depth = d[v_idx, p_idx]
+            if depth >= 0.0:
+                return
+            n, r = normals[p_idx], x[v_idx] - b.x
+            w = b.omega()
+            vn = float(n @ (b.v + cross_wr(w, r)))
+            if b.rotation == "hinge":  # turn about the hinge only; the hinge holds the rest
+                a = b.hinge.axis
+                arm = float(a @ cross3(x[v_idx] - b.hinge.pivot, n))
+                if vn < 0.0 and arm != 0.0:
+                    j = -(1.0 + self.restitution) * vn / (arm * arm / b.hinge_inertia())
+                    b.kick(np.zeros(self.dim), j * arm * a, 1.0)
+                    self.contacts += 1
+                    continue
+                return
+            if vn < 0.0:
+                rn = cross3(r, n)
+                if b.rotation == "free":
+                    inv = np.linalg.solve(b.inertia_world(), rn) if self.dim == 3 else rn / b.inertia_ref[0, 0]
+                    turn = float(n @ cross_wr(inv, r))
+                else:
+                    turn = 0.0
+                free_n = b.free * n
+                m_inv = float(free_n @ n) / b.mass + turn
+                if m_inv > 0.0:
+                    j = -(1.0 + self.restitution) * vn / m_inv
+                    b.kick(j * n, j * rn, 1.0)
+            b.x = b.x - depth * b.free * n
+            self.contacts += 1
 
     def impulse(self, impulse, angular_impulse) -> None:
         """The contact impulses of the step (N s, N m s about the centre of mass)."""

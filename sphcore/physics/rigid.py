@@ -171,10 +171,10 @@ class RigidBody:
             r = R @ (np.asarray(s.attach, float) - self.centre_ref)
             p = self.x + r
             d, length = _unit(p - np.asarray(s.anchor, float))
-            vp = self.v + _cross(w, r)
+            vp = self.v + cross_wr(w, r)
             f = -(s.stiffness * (length - s.rest_length) + s.damping * float(vp @ d)) * d
             F = F + f
-            T = T + _cross3(r, f)
+            T = T + cross3(r, f)
         return F, T
 
     # -- the step ---------------------------------------------------------------------------
@@ -184,9 +184,9 @@ class RigidBody:
         centre of mass, 3-vector)."""
         if self.rotation == "hinge":
             a, p = self.hinge.axis, self.hinge.pivot
-            torque = float(a @ (np.asarray(T, float) + _cross3(self.x - p, F)))  # about the hinge
+            torque = float(a @ (np.asarray(T, float) + cross3(self.x - p, F)))  # about the hinge
             self.L = self.L + h * torque * a
-            self.v = _cross(self.omega(), self.x - p)
+            self.v = cross_wr(self.omega(), self.x - p)
             return
         self.v = self.v + h * self.free * np.asarray(F, float) / self.mass
         if self.rotation == "free":
@@ -200,7 +200,7 @@ class RigidBody:
             turn = rotation_matrix(self.dim, a, phi)
             self.x = p + turn @ (self.x - p)
             self._turn_world(a, phi)
-            self.v = _cross(self.omega(), self.x - p)
+            self.v = cross_wr(self.omega(), self.x - p)
             return
         self.x = self.x + dt * self.v
         if self.rotation == "fixed":
@@ -248,14 +248,14 @@ class RigidBody:
         return own + self.mass * float(off @ off)
 
 
-def _cross(w: np.ndarray, r: np.ndarray) -> np.ndarray:
+def cross_wr(w: np.ndarray, r: np.ndarray) -> np.ndarray:
     """w x r for a 3-vector w and a point r (dim)."""
     if len(r) == 2:
         return np.array([-w[2] * r[1], w[2] * r[0]])
     return np.cross(w, r)
 
 
-def _cross3(r: np.ndarray, f: np.ndarray) -> np.ndarray:
+def cross3(r: np.ndarray, f: np.ndarray) -> np.ndarray:
     """r x f as a 3-vector (2D: along z)."""
     if len(r) == 2:
         return np.array([0.0, 0.0, r[0] * f[1] - r[1] * f[0]])
