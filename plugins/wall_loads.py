@@ -37,8 +37,11 @@ from sphcore_plugins.netcdf import case_attributes, header_cut, new_dataset, out
 TABLE = "wall_loads"
 FILE_NAME = "wall_loads.nc"
 CSV_NAME = "wall_loads.csv"
-HEADER = {"time", "step", "force", "moment"}  # the variables a whole header holds
+HEADER = {"time", "step", "force", "moment", "position", "rotation", "velocity", "angular_velocity"}
 COMPONENTS = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
+#: the group's motion at each row: its centre of rotation, rotation vector, their rates
+KINEMATICS = {"position": ("x", "y", "z"), "rotation": ("rx", "ry", "rz"), "velocity": ("vx", "vy", "vz"),
+              "angular_velocity": ("wx", "wy", "wz")}
 
 
 class WallLoadsWriter(ScheduledWriter):
@@ -85,9 +88,13 @@ class WallLoadsWriter(ScheduledWriter):
         path = Path(ctx.output_dir or ".") / FILE_NAME
         if ctx.output_dir is not None and self.groups and path.exists():
             t, loads = read_loads(path)
-            header = "t," + ",".join(f"{g}.{c}" for g in self.groups for c in COMPONENTS)
-            rows = [",".join([repr(float(t[i]))] + [repr(float(x)) for x in loads[i].ravel()]) for i in range(len(t))]
-            text = "# force in N (N/m in 2D), moment in N m (N m/m in 2D) about each group's centre of rotation\n" \
+            motion = read_kinematics(path)
+            columns = COMPONENTS + tuple(c for cs in KINEMATICS.values() for c in cs)
+            header = "t," + ",".join(f"{g}.{c}" for g in self.groups for c in columns)
+            table = np.concatenate([loads, motion], axis=2)
+            rows = [",".join([repr(float(t[i]))] + [repr(float(x)) for x in table[i].ravel()]) for i in range(len(t))]
+            text = "# force in N (N/m in 2D), moment in N m (N m/m in 2D) about each group's centre of rotation; " \
+                   "its position (m), rotation vector (rad), velocity (m/s) and angular velocity (rad/s)\n" \
                    + header + "\n" + "".join(r + "\n" for r in rows)
             write_atomically(Path(ctx.output_dir) / CSV_NAME, lambda tmp: tmp.write_text(text))
 
@@ -112,6 +119,8 @@ class WallLoadsWriter(ScheduledWriter):
             self.ds["time"][self.row] = np.nan
             self.ds["force"][self.row] = values[:, :3]
             self.ds["moment"][self.row] = values[:, 3:]
+            for name, rows in kinematics(ctx, self.groups).items():
+                self.ds[name][self.row] = rows
             self.ds["step"][self.row] = int(ctx.step)
             self.ds["time"][self.row] = float(ctx.t)  # last: a row with a time is complete
             self.ds.sync()
@@ -138,6 +147,14 @@ class WallLoadsWriter(ScheduledWriter):
                 {"units": unit_f, "long_name": "force of the fluid on the wall group (x, y, z)"})
             ds.createVariable("moment", "f8", ("time", "wall_group", "axis3"), fill_value=False).setncatts(
                 {"units": unit_m, "long_name": "moment of the fluid on the wall group about its centre of rotation"})
+            for name, (unit, meaning) in {
+                    "position": ("m", "the group's centre of rotation (a body's centre of mass) where it is"),
+                    "rotation": ("rad", "rotation vector (axis times angle) of the group from where case.toml "
+                                        "draws it (2D: about z)"),
+                    "velocity": ("m s-1", "velocity of the group's centre of rotation"),
+                    "angular_velocity": ("rad s-1", "angular velocity of the group")}.items():
+                ds.createVariable(name, "f8", ("time", "wall_group", "axis3"), fill_value=False).setncatts(
+                    {"units": unit, "long_name": meaning})
             ds.sync()
         except (OSError, RuntimeError) as err:
             raise output_error(self.path, "write the wall loads' header", err) from err
@@ -183,3 +200,31 @@ def read_loads(path: Path):
         loads = np.concatenate([np.asarray(ds["force"][:], float), np.asarray(ds["moment"][:], float)], axis=2)
     ok = np.isfinite(t)
     return t[ok], loads[ok]
+
+
+def kinematics(ctx, groups) -> dict:
+    """Each group's motion now: {variable: (groups, 3)} (2D: the third component of the
+    position and velocity 0, rotations about z)."""
+    from sphcore.physics.rigid import rotation_vector
+
+    moving = {g.name: g for g in getattr(ctx.case, "moving", ())}
+    out = {name: np.zeros((len(groups), 3)) for name in KINEMATICS}
+    for k, name in enumerate(groups):
+        pose = moving[name].motion.pose(ctx.t)
+        dim = len(pose.shift)
+        out["position"][k, :dim] = pose.centre + pose.shift
+        out["velocity"][k, :dim] = pose.velocity
+        out["rotation"][k] = rotation_vector(pose.rotation)
+        out["angular_velocity"][k] = pose.omega
+    return out
+
+
+def read_kinematics(path: Path) -> np.ndarray:
+    """(n, groups, 12) of a ``wall_loads.nc``: position, rotation, velocity, angular velocity,
+    complete rows."""
+    import netCDF4
+    with netCDF4.Dataset(path) as ds:
+        ds.set_auto_maskandscale(False)
+        t = np.asarray(ds["time"][:], float)
+        parts = [np.asarray(ds[name][:], float) for name in KINEMATICS]
+    return np.concatenate(parts, axis=2)[np.isfinite(t)]

@@ -219,3 +219,20 @@ def test_a_box_dropped_on_the_floor_stays_above_it_and_bounces_with_its_restitut
     assert vs[first - 1] == pytest.approx(-hit, rel=2e-3)
     assert vs[first] == pytest.approx(restitution * hit, rel=2e-3, abs=2 * 9.81 * dt)
     assert motion.contacts >= 1
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1), st.floats(0.0, 3.14159))
+def test_the_rotation_vector_gives_back_the_axis_and_angle(ax, ay, az, angle):
+    from sphcore.physics.rigid import rotation_vector
+
+    axis = np.array([ax, ay, az])
+    if np.linalg.norm(axis) < 0.1:
+        axis = np.array([0.0, 0.0, 1.0])
+    axis /= np.linalg.norm(axis)
+    got = rotation_vector(quat_matrix(quat_axis_angle(axis, angle)))
+    want = angle * axis
+    # at a half turn the axis's sign is arbitrary
+    assert np.allclose(got, want, atol=1e-6) or (angle > 3.1 and np.allclose(got, -want, atol=1e-3))
+    assert rotation_vector(np.array([[math.cos(0.3), -math.sin(0.3)], [math.sin(0.3), math.cos(0.3)]]))[2] == \
+        pytest.approx(0.3)

@@ -112,6 +112,6 @@ def parse_bodies(file, cfg, dim, ranges, faces, taken, planes) -> list[MovingGro
         reach = float(np.sqrt(((faces.verts[start:stop].reshape(-1, dim) - props.centre) ** 2).sum(1).max()))
         idx = np.arange(start, stop, dtype=np.int64)
         vertices = np.unique(faces.verts[start:stop].reshape(-1, dim), axis=0)
-        motion = BodyMotion(body, gravity, b["restitution"], vertices, (planes.normals, planes.points))
+        motion = BodyMotion(body, gravity, b["restitution"], vertices, (planes.normals, planes.points), b["release"])
         groups.append(MovingGroup(key, motion, np.zeros(0, np.int64), idx, reach))
     return groups

@@ -178,6 +178,8 @@ BODY: dict[str, O] = {
                   "hinge_point, nothing else)", choices=("free", "fixed", "hinge")),
     "hinge_point": O(None, "vector", "m", "hinge: a point of the hinge's axis", nullable=True),
     "hinge_axis": O(None, "vector", doc="hinge in 3D: the axis' direction (2D: about z)", nullable=True),
+    "release": O(0.0, "float", "s", "the body is held where case.toml draws it until this time (the water settles "
+                 "round it), then the loads move it", min=0.0),
     "restitution": O(0.5, "float", doc="coefficient of restitution of the body's contacts with the fixed walls "
                      "(0: plastic, 1: elastic)", min=0.0, extra={"max": 1.0}),
     "springs": O([], "table_list", doc="linear springs and dashpots to fixed anchors, a simple mooring (keys: "

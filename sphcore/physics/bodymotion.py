@@ -34,13 +34,16 @@ class BodyMotion:
 
     t_last = math.inf
 
-    def __init__(self, body: RigidBody, gravity: np.ndarray, restitution: float = 0.5, vertices=None, planes=None):
+    def __init__(self, body: RigidBody, gravity: np.ndarray, restitution: float = 0.5, vertices=None, planes=None,
+                 release: float = 0.0):
         self.dim = body.dim
+        self.release = release  # held until then
         self.restitution = restitution
         #: the body's vertices (reference frame) and the fixed planes (normals, points) they stay inside
         self.vertices = np.zeros((0, body.dim)) if vertices is None else np.asarray(vertices, float)
         self.planes = planes
         self.contacts = 0  # contacts with the fixed walls so far
+        self.held = False
         self.body = body
         self.gravity = np.asarray(gravity, float)[: body.dim]
         self.t0, self.dt = 0.0, 0.0
@@ -72,10 +75,14 @@ class BodyMotion:
     def begin_step(self, t0: float, dt: float, fluid_force, fluid_moment) -> None:
         """Half a kick with the loads at t0 (the fluid's given), then the drift to t0 + dt."""
         b = self.body
+        self.t0, self.dt = t0, dt
+        self.held = t0 < self.release
+        if self.held:  # held where it is drawn: its pose does not change over the step
+            self._start = self._end = self._now()
+            return
         F, T = self._own_load()
         F, T = F + np.asarray(fluid_force, float)[: self.dim], T + _three(fluid_moment)
         self._record(F, T)
-        self.t0, self.dt = t0, dt
         self._start = self._now()
         b.kick(F, T, 0.5 * dt)
         self._before = copy.deepcopy(b)
@@ -129,10 +136,15 @@ class BodyMotion:
 
     def impulse(self, impulse, angular_impulse) -> None:
         """The contact impulses of the step (N s, N m s about the centre of mass)."""
+        if self.held:
+            return
         self.body.kick(np.asarray(impulse, float)[: self.dim], _three(angular_impulse), 1.0)
 
     def end_step(self, fluid_force, fluid_moment) -> None:
         """The second half kick with the loads at the end of the step."""
+        if self.held:
+            self._start = self._end = None
+            return
         F, T = self._own_load()
         F, T = F + np.asarray(fluid_force, float)[: self.dim], T + _three(fluid_moment)
         self._record(F, T)

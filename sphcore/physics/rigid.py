@@ -260,3 +260,18 @@ def cross3(r: np.ndarray, f: np.ndarray) -> np.ndarray:
     if len(r) == 2:
         return np.array([0.0, 0.0, r[0] * f[1] - r[1] * f[0]])
     return np.cross(r, f)
+
+
+def rotation_vector(R: np.ndarray) -> np.ndarray:
+    """The rotation vector (unit axis times angle in [0, pi], rad) of the rotation matrix R
+    (2D: about z)."""
+    if R.shape == (2, 2):
+        return np.array([0.0, 0.0, math.atan2(R[1, 0], R[0, 0])])
+    angle = math.acos(max(-1.0, min(1.0, 0.5 * (np.trace(R) - 1.0))))
+    if angle < 1e-12:
+        return np.zeros(3)
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    if angle > math.pi - 1e-6:  # near a half turn the skew part vanishes: the axis from R + I
+        M = 0.5 * (R + np.eye(3))
+        axis = M[:, int(np.argmax(np.diag(M)))]
+    return angle * axis / np.linalg.norm(axis)
