@@ -51,6 +51,16 @@ class Simulation:
         run.attach_pairs(self.forces.pairs)  # a restart's lists are rebuilt from its anchor
         self.integrator = SCHEMES[case.config["integrator"]["scheme"]](run, self.forces.evaluate,
                                                                       evolves_density=params.sph)
+        # floating bodies: wall groups whose motion the fluid's loads advance (not while relaxing:
+        # the relaxation settles the fluid around the bodies where case.toml draws them); a
+        # restart puts them where the checkpoint has them before any plugin looks at the walls
+        self.bodies = [] if relaxing else [(g.name, g.motion) for g in case.moving if hasattr(g.motion, "begin_step")]
+        kept = run.kept.get("bodies", {})
+        for name, motion in self.bodies:
+            if name in kept:
+                motion.restore(kept[name])
+                f = kept[name]["fluid_load"]
+                ctx.wall_forces[name] = (np.asarray(f[:3]), np.asarray(f[3:]))
         pm.hook.sph_setup(ctx=ctx)  # every ctx attribute is usable here
         self.integrator.resize()  # a plugin may have added particles
         self.update_pressure()
@@ -66,13 +76,6 @@ class Simulation:
             f"off: plugin(s) {', '.join(working)} add accelerations and report no energy (sph_energy)" if working
             else f"off: walls move ({', '.join(moving)}) and do work on the fluid")
         self._energy_reference()
-        # floating bodies: wall groups whose motion the fluid's loads advance (not while relaxing:
-        # the relaxation settles the fluid around the bodies where case.toml draws them)
-        self.bodies = [] if relaxing else [(g.name, g.motion) for g in case.moving if hasattr(g.motion, "begin_step")]
-        kept = run.kept.get("bodies", {})
-        for name, motion in self.bodies:
-            if name in kept:
-                motion.restore(kept[name])
         # what a step does before it moves the particles, on step counts (sphcore.run.activities)
         cfg = case.config
         self.before_step = []
@@ -203,7 +206,8 @@ class Simulation:
         if self.bodies:  # the other half kick, with the loads at t + dt
             for name, body in self.bodies:
                 body.end_step(*ctx.wall_forces.get(name, none))
-            self.run.kept["bodies"] = {name: body.state() for name, body in self.bodies}
+            self.run.kept["bodies"] = {name: {**body.state(), "fluid_load": _six(ctx.wall_forces.get(name, none))}
+                                       for name, body in self.bodies}
         ctx.step += 1
         if self.checks_due.due(self.run.clock):
             self.check()
@@ -261,3 +265,9 @@ class Simulation:
         return self.t_end - self.t <= 1e-9 * (self.dt or self.t_end)
 
 
+def _six(load) -> list:
+    """(F, M) as six floats (F padded to three components)."""
+    f, m = np.zeros(3), np.zeros(3)
+    f[:len(load[0])] = load[0]
+    m[:len(load[1])] = load[1]
+    return [float(v) for v in f] + [float(v) for v in m]
