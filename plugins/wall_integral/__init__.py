@@ -63,6 +63,7 @@ class WallIntegralPlugin:
         self._near = np.zeros(0, np.int64)  # indices of the particles near a plane (scratch)
         self._table = None
         self.walls = None  # finite faces (sphcore.geometry.faces.Faces) or None
+        self.bodies = set()
         self._faces = None
         self._epoch = 0
 
@@ -98,6 +99,8 @@ class WallIntegralPlugin:
         groups = tuple(getattr(case, "moving", ()))
         self.plane_groups = tuple(g for g in groups if len(g.planes))
         self.face_groups = tuple(g for g in groups if len(g.faces))
+        # floating bodies (their motion answers begin_step): their loads come from the reaction
+        self.bodies = {g.name for g in self.face_groups if hasattr(g.motion, "begin_step")}
         self._fixed = None
         if self.walls is not None and self.face_groups:
             moving = np.zeros(self.walls.count, bool)
@@ -154,13 +157,26 @@ class WallIntegralPlugin:
         if self.walls is not None:
             if self._fixed is None or len(self._fixed):
                 self._add_face_terms(ctx, terms)
+            members = {}
             for k, g in enumerate(self.face_groups):
+                before = terms.grad.copy() if g.name in self.bodies else None
                 force, moment = self._moving_face_terms(ctx, terms, k, g)
+                if before is not None:  # the particles this body's faces reach, and by how much
+                    part = np.sqrt(((terms.grad - before) ** 2).sum(axis=1))
+                    members[g.name] = part
                 if g.name in loads:  # the tank's walls: its planes and faces together
                     force, moment = force + loads[g.name][0], moment + loads[g.name][1]
                 loads[g.name] = (force, moment)
+        if self.walls is not None and self.bodies:
+            # each body's particles, weighted by the body's part of their wall gradient: the
+            # load is the reaction of what the completion gives them (ctx.wall_members)
+            total = np.sqrt((terms.grad ** 2).sum(axis=1))
+            for name, part in members.items():
+                idx = np.flatnonzero(part > 0.0)
+                ctx.wall_members[name] = (idx, np.minimum(1.0, part[idx] / total[idx]))
         for name, (force, moment) in loads.items():
-            ctx.set_wall_force(name, force, moment)
+            if name not in self.bodies:  # a body's load is the exact reaction (the run sums it)
+                ctx.set_wall_force(name, force, moment)
         if self.plane_groups or self.face_groups:  # kept for the next step's load (restart too)
             ctx.kept(self)["loads"] = {name: [float(v) for v in f] + [float(v) for v in m]
                                        for name, (f, m) in loads.items()}

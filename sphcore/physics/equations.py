@@ -100,6 +100,9 @@ class WallTerms(NamedTuple):
     active: bool
     flux: np.ndarray = np.zeros(0)
     accel: np.ndarray = np.zeros((0, 3))
+    #: (n, dim), moving walls only: the acceleration the completion gave each particle (m/s^2),
+    #: whose reaction, summed over a group's particles, is the fluid's load on that group
+    react: np.ndarray = np.zeros((0, 3))
 
 
 # constants of each compiled twin of the pair loop (see the end): the spatial dimension,

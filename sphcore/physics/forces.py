@@ -177,6 +177,12 @@ class Forces:
         pid = int(ctx.state.id[far]) if far < ctx.state.n else -1
         raise Instability(ctx.step, ctx.t, pid, f"neighbour search failed: {e}") from None
 
+    def wall_react(self):
+        """The acceleration the wall completion gave each particle at the last evaluation
+        (``WallTerms.react``, runs with moving walls), or None."""
+        react = self._wall.react
+        return react if self._wall.active and react.shape[0] == self.ctx.state.n else None
+
     def wall_terms(self) -> WallTerms:
         """Per-particle wall terms from the plugins that supply them (``sph_wall_terms``)."""
         if not self.wants_walls:
@@ -185,7 +191,8 @@ class Forces:
         if self._wall.share.shape[0] != n:
             moving = n if getattr(self.ctx.case, "moving", ()) else 0  # moving walls' terms, else empty
             self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)),
-                                   np.zeros(n), True, np.zeros(moving), np.zeros((moving, dim)))
+                                   np.zeros(n), True, np.zeros(moving), np.zeros((moving, dim)),
+                                   np.zeros((moving, dim)))
         w = self._wall
         w.share[:] = 0.0
         w.grad[:] = 0.0
@@ -194,6 +201,7 @@ class Forces:
         w.fill[:] = 0.0
         w.flux[:] = 0.0
         w.accel[:] = 0.0
+        w.react[:] = 0.0
         self.hook.sph_wall_terms(ctx=self.ctx, terms=w)
         self.ctx.counters["wall_terms"] += 1
         return w

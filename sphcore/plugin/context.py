@@ -84,6 +84,9 @@ class RunContext:
         self.wall_forces: dict[str, tuple] = {}
         #: the contact impulses each moving group took during the current step
         self.contact_impulses: dict[str, list] = {}
+        #: {group: (particle indices, weights)}: the particles a floating body's walls completed
+        #: at the last evaluation of the rates and the body's share of each one's wall terms
+        self.wall_members: dict[str, tuple] = {}
 
     # -- the run state, by name ---------------------------------------------------------
 

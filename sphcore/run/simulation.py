@@ -188,6 +188,8 @@ class Simulation:
                               "time cannot advance")
         integ, st = self.integrator, self.state
         none = (np.zeros(3), np.zeros(3))
+        if any(name not in ctx.wall_forces for name, _ in self.bodies):  # the first step's loads
+            self._body_loads()
         for name, body in self.bodies:  # half a kick and the drift: the walls at t + dt
             body.begin_step(ctx.t, ctx.dt, *ctx.wall_forces.get(name, none))
         ctx.contact_impulses.clear()
@@ -204,6 +206,7 @@ class Simulation:
         if integ.finish(ctx.dt):  # the density changed again: its pressure too
             self.update_pressure()
         if self.bodies:  # the other half kick, with the loads at t + dt
+            self._body_loads()
             for name, body in self.bodies:
                 body.end_step(*ctx.wall_forces.get(name, none))
             self.run.kept["bodies"] = {name: {**body.state(), "fluid_load": _six(ctx.wall_forces.get(name, none))}
@@ -213,6 +216,29 @@ class Simulation:
             self.check()
         if not self.relaxing:  # gauges and probes sample the run, not its relaxation
             self.hooks.sph_after_step(ctx=ctx)
+
+    def _body_loads(self) -> None:
+        """Each floating body's load at the last evaluation of the rates, where its walls'
+        particles are known (``ctx.wall_members``): minus the sum of m_i times the
+        acceleration the completion gave them (``WallTerms.react``), weighted by the body's
+        share of their wall terms, and its moment about the centre of mass. The fluid's
+        momentum and the body's then change by opposite amounts."""
+        ctx, react = self.ctx, self.forces.wall_react()
+        if react is None:
+            return
+        st = self.state
+        for name, body in self.bodies:
+            if name not in ctx.wall_members:
+                continue
+            idx, w = ctx.wall_members[name]
+            f = -(st.m[idx] * w)[:, None] * react[idx]
+            force = f.sum(axis=0)
+            arm = st.pos[idx] - body.body.x
+            if arm.shape[1] == 2:
+                moment = np.array([0.0, 0.0, float((arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0]).sum())])
+            else:
+                moment = np.cross(arm, f).sum(axis=0)
+            ctx.wall_forces[name] = (force, moment)
 
     # -- checks -----------------------------------------------------------------------
 
