@@ -1,0 +1,136 @@
+"""Floating bodies in runs: the fluid and a body exchange momentum and nothing else, a body
+holds its place under its buoyancy, and a checkpoint carries the body."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from sphcore.testing import run_case
+
+THROWN = """
+[case]
+name = "thrown"
+dim = 2
+[domain]
+min = [0.0, 0.0]
+max = [1.0, 1.0]
+[[domain.walls]]
+shape = "box"
+min = [0.2, 0.45]
+max = [0.3, 0.55]
+[[bodies]]
+wall = 0
+density = 1000.0
+velocity = [1.0, 0.1]
+angular_velocity = [2.0]
+[[blocks]]
+min = [0.35, 0.3]
+max = [0.65, 0.7]
+[particles]
+dx = 0.02
+[physics]
+gravity = [0.0, 0.0, 0.0]
+[eos]
+c0 = 20.0
+[kernel]
+h_over_dx = 2.0
+[viscosity]
+alpha = 0.02
+[time]
+t_end = 0.15
+[plugins]
+use = PLUGINS
+"""
+
+
+def _momentum(out):
+    ck = np.load(out / "checkpoint.npz", allow_pickle=True)
+    fluid = (ck["state_m"][:, None] * ck["state_vel"]).sum(axis=0)
+    body = json.loads(str(ck["meta"]))["kept"]["bodies"]["bodies[0]"]
+    return fluid, 1000.0 * 0.1 * 0.1 * np.asarray(body["v"]), np.asarray(body["x"])
+
+
+@pytest.mark.parametrize("plugins", ['["reflective"]', '["reflective", "wall_integral"]'])
+def test_a_body_thrown_into_free_water_keeps_the_momentum_of_both(tmp_path, plugins):
+    """Zero gravity, no fixed wall reached: what the body loses the water gains, with the
+    reflective contacts' impulses and with the wall model's pressure (its exact reaction)."""
+    run_case(tmp_path, THROWN.replace("PLUGINS", plugins))
+    fluid, body, x = _momentum(tmp_path / "output")
+    assert x[0] > 0.27  # it reached the water
+    assert np.linalg.norm(fluid) > 1.0  # and gave it a good part of its 10 N s/m
+    np.testing.assert_allclose(fluid + body, [10.0, 1.0], rtol=0, atol=1e-9)
+
+
+HEAVING = """
+[case]
+name = "heaving"
+dim = 2
+[domain]
+min = [0.0, 0.0]
+max = [0.6, 0.4]
+[[domain.walls]]
+shape = "box"
+min = [0.2, 0.16]
+max = [0.4, 0.26]
+[[bodies]]
+wall = 0
+density = 500.0
+velocity = [0.0, 0.05]
+angular_velocity = [0.3]
+[[blocks]]
+min = [0.0, 0.0]
+max = [0.6, 0.2]
+[particles]
+dx = 0.02
+[kernel]
+h_over_dx = 2.0
+[viscosity]
+alpha = 0.05
+[time]
+t_end = 3.0
+[plugins]
+use = ["reflective", "wall_integral", "vtu"]
+[vtu]
+every_dt = 0.01
+"""
+
+
+def test_a_run_with_a_body_stopped_and_restarted_ends_bit_for_bit(tmp_path):
+    """SIGINT once frames are on disk, --restart to the end: every array of the final
+    checkpoint and the body's state equal those of the run that was not stopped."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    case = tmp_path / "case"
+    case.mkdir()
+    (case / "case.toml").write_text(HEAVING)
+    sph = [sys.executable, "-m", "sphcore.cli", "run", str(case), "--progress", "off"]
+    whole = subprocess.run(sph + ["--output", str(tmp_path / "whole")], capture_output=True, text=True)
+    assert whole.returncode == 0, whole.stderr
+    out = tmp_path / "stopped"
+    proc = subprocess.Popen(sph + ["--output", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(out.glob("vtu/*.vtu"))) < 5:  # frames on disk: the run is well under way
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            time.sleep(0.01)
+        proc.send_signal(signal.SIGINT)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130
+    again = subprocess.run(sph + ["--output", str(out), "--restart"], capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    a, b = (np.load(d / "checkpoint.npz", allow_pickle=True) for d in (tmp_path / "whole", out))
+    for key in a.files:
+        if key != "meta":
+            assert np.array_equal(a[key], b[key]), key
+    kept = [json.loads(str(c["meta"]))["kept"]["bodies"] for c in (a, b)]
+    assert kept[0] == kept[1]
