@@ -82,26 +82,20 @@ def _plots(results, exp, figures: Path):
     plt = pyplot()
     t1 = max((float(p["time"][-1]) for _, p, _ in results.values() if p is not None), default=2.0)
     keep = exp["t"] <= t1
-    fig, axes = plt.subplots(4, 1, figsize=(7, 8), sharex=True)
-    for k, ax in enumerate(axes):
-        name = f"H{k + 1}"
+    _panels(plt, exp, keep, results, ("H1", "H2", "H3", "H4"), "m", 0.9, (7, 8), figures, f"{NAME}_depths.png")
+    _panels(plt, exp, keep, results, ("P1", "P3"), "Pa", 0.7, (7, 6), figures, f"{NAME}_pressures.png")
+
+
+def _panels(plt, exp, keep, results, names, unit, lw, size, figures, file):
+    """One panel per probe of ``names``: the experiment and each treatment's run."""
+    fig, axes = plt.subplots(len(names), 1, figsize=size, sharex=True)
+    for ax, name in zip(axes, names):
         ax.plot(exp["t"][keep], exp[name][keep], color="0.3", lw=1.2, label="Kleefsman et al. 2005")
         for i, (label, (_, p, _)) in enumerate(results.items()):
             if p is not None and name in p:
-                ax.plot(p["time"], p[name], color=f"C{i}", lw=0.9, label=f"sphcore, {label}")
-        ax.set_ylabel(f"{name} (m)")
+                ax.plot(p["time"], p[name], color=f"C{i}", lw=lw, label=f"sphcore, {label}")
+        ax.set_ylabel(f"{name} ({unit})")
     axes[0].legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("t (s)")
     fig.tight_layout()
-    save(fig, figures, f"{NAME}_depths.png")
-    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    for ax, name in zip(axes, ("P1", "P3")):
-        ax.plot(exp["t"][keep], exp[name][keep], color="0.3", lw=1.2, label="Kleefsman et al. 2005")
-        for i, (label, (_, p, _)) in enumerate(results.items()):
-            if p is not None and name in p:
-                ax.plot(p["time"], p[name], color=f"C{i}", lw=0.7, label=f"sphcore, {label}")
-        ax.set_ylabel(f"{name} (Pa)")
-    axes[0].legend(loc="upper right", fontsize=8)
-    axes[-1].set_xlabel("t (s)")
-    fig.tight_layout()
-    save(fig, figures, f"{NAME}_pressures.png")
+    save(fig, figures, file)
