@@ -188,69 +188,92 @@ def _fmt(x, spec=".4f"):
     return "n/a" if x is None or not np.isfinite(x) else format(x, spec)
 
 
-def free(args) -> int:
-    run = open_run(args.run)
+def free_decay(run, after: float = 0.0, until: float | None = None, length: float | None = None,
+               depth: float | None = None) -> dict:
+    """The free decay of a run's depth gauges from ``after`` to ``until`` (s): {length, depth,
+    g, T1 (linear theory at the nominal depth), t_all, gauges (the depth probes), keep (the
+    samples measured), t, level (the gauges' mean level, all samples), seen (its mean over
+    the decay), drift (m/s), series: [(name, eta, decay, fit)], the last the antisymmetric
+    part (left - right)/2}. Raises RunError where the run has no depth gauge or the case no
+    tank size (and none is given)."""
     data = run.probes()
     t_all = data["t"]
     gauges = [p for p in data["probes"] if p["kind"] == "depth"]
     if not gauges:
         raise RunError(f"{run.dir}: no depth gauge among the probes (expected [[probes.depth]] near the end walls)")
-    length, depth = tank_size(run.config)
-    length = args.length if args.length is not None else length
-    depth = args.depth if args.depth is not None else depth
+    case_length, case_depth = tank_size(run.config)
+    length = length if length is not None else case_length
+    depth = depth if depth is not None else case_depth
     if length is None or depth is None:
         raise RunError(f"{run.dir}: the case gives no tank length or water depth: pass --length and --depth")
     g = float(np.linalg.norm(run.config.get("physics", {}).get("gravity", [0.0, -G])[:2])) or G
     t_theory = linear_period(length, depth, g)
-    keep = (t_all >= args.after) & (t_all <= (args.until if args.until is not None else np.inf))
+    keep = (t_all >= after) & (t_all <= (until if until is not None else np.inf))
     t = t_all[keep]
     series = [(p["name"], p["values"][keep]) for p in gauges]
     if len(gauges) >= 2:
         # gauges ordered along x by name order in the case: the first and the last
         series.append((f"({gauges[0]['name']} - {gauges[-1]['name']})/2",
                        0.5 * (gauges[0]["values"][keep] - gauges[-1]["values"][keep])))
-    print(f"tank L = {length:g} m, water h = {depth:g} m, g = {g:g} m/s^2: linear theory "
-          f"omega^2 = g k tanh(k h), k = pi/L: T1 = {t_theory:.4f} s")
-    print(f"free decay from t = {t[0] if len(t) else args.after:g} s to {t[-1] if len(t) else math.nan:g} s "
-          f"({len(t)} samples)")
+    out = {"length": length, "depth": depth, "g": g, "T1": t_theory, "t_all": t_all, "gauges": gauges,
+           "keep": keep, "t": t, "after": after, "level": None, "seen": math.nan, "drift": math.nan, "series": []}
     if len(t) > 1:
         level = np.mean([p["values"] for p in gauges], axis=0)
-        drift = np.polyfit(t, level[keep], 1)[0]
-        seen = float(level[keep].mean())
-        print(f"the gauges' mean level: {level[0]:.4f} m at t = {t_all[0]:g} s, {seen:.4f} m over the decay "
-              f"(drifting {1e3 * drift:+.2f} mm/s); linear theory at {seen:.4f} m: "
-              f"T1 = {linear_period(length, seen, g):.4f} s")
-    print("zero crossings (of the record smoothed over T1/8): T from their times, zeta from the logarithmic "
-          "decrement of the peaks between them; fit: a damped sine over a straight line, to the record itself")
-    print(f"{'gauge':<22} {'crossings':>9} {'T [s]':>8} {'zeta':>8} | {'fit T [s]':>9} {'T/T1-1':>8} {'zeta':>8} "
-          f"{'a0 [mm]':>8} {'rms [mm]':>8}")
-    results = []
+        out.update(level=level, drift=float(np.polyfit(t, level[keep], 1)[0]), seen=float(level[keep].mean()))
     for name, v in series:
         if len(v) > 1:
             eta = v - np.polyval(np.polyfit(t, v, 1), t)  # without the drift of the mean level
             r = decay(t, smooth(t, eta, t_theory / 8.0))
         else:
             eta, r = v, decay(np.zeros(1), np.zeros(1))
-        f = fit_damped(t, eta, r["period"])
+        out["series"].append((name, eta, r, fit_damped(t, eta, r["period"])))
+    return out
+
+
+def plot_free(m: dict, ax) -> None:
+    """The gauges less their mean over the decay, the antisymmetric part without its drift
+    and its peaks, on ``ax`` (mm against s)."""
+    keep, t_all = m["keep"], m["t_all"]
+    for p in m["gauges"]:
+        ax.plot(t_all, 1e3 * (p["values"] - (p["values"][keep].mean() if keep.any() else 0.0)), lw=0.8,
+                label=p["name"])
+    name, eta, r, _ = m["series"][-1]
+    if len(m["t"]):
+        ax.plot(m["t"], 1e3 * eta, "k-", lw=0.8, label=f"{name}, without its drift")
+    if len(r["times"]):
+        ax.plot(r["times"], 1e3 * r["amplitudes"], "k.", ms=4, label=f"|{name}| peaks")
+    ax.axvline(m["after"], color="0.6", ls="--", lw=0.8)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("surface elevation [mm]")
+
+
+def free(args) -> int:
+    run = open_run(args.run)
+    m = free_decay(run, args.after, args.until, args.length, args.depth)
+    t, t_all, length, depth, g, t_theory = m["t"], m["t_all"], m["length"], m["depth"], m["g"], m["T1"]
+    print(f"tank L = {length:g} m, water h = {depth:g} m, g = {g:g} m/s^2: linear theory "
+          f"omega^2 = g k tanh(k h), k = pi/L: T1 = {t_theory:.4f} s")
+    print(f"free decay from t = {t[0] if len(t) else args.after:g} s to {t[-1] if len(t) else math.nan:g} s "
+          f"({len(t)} samples)")
+    if m["level"] is not None:
+        seen = m["seen"]
+        print(f"the gauges' mean level: {m['level'][0]:.4f} m at t = {t_all[0]:g} s, {seen:.4f} m over the decay "
+              f"(drifting {1e3 * m['drift']:+.2f} mm/s); linear theory at {seen:.4f} m: "
+              f"T1 = {linear_period(length, seen, g):.4f} s")
+    print("zero crossings (of the record smoothed over T1/8): T from their times, zeta from the logarithmic "
+          "decrement of the peaks between them; fit: a damped sine over a straight line, to the record itself")
+    print(f"{'gauge':<22} {'crossings':>9} {'T [s]':>8} {'zeta':>8} | {'fit T [s]':>9} {'T/T1-1':>8} {'zeta':>8} "
+          f"{'a0 [mm]':>8} {'rms [mm]':>8}")
+    for name, eta, r, f in m["series"]:
         err = f["period"] / t_theory - 1.0
         print(f"{name:<22} {r['crossings']:>9d} {_fmt(r['period']):>8} {_fmt(r['zeta'], '.4f'):>8} | "
               f"{_fmt(f['period']):>9} {_fmt(100 * err, '+.2f') + '%':>8} {_fmt(f['zeta'], '.4f'):>8} "
               f"{_fmt(1e3 * f['amplitude'], '.2f'):>8} {_fmt(1e3 * f['rms'], '.2f'):>8}")
-        results.append((name, eta, r, f))
     if not args.no_plot:
         plt = pyplot()
         fig, ax = plt.subplots(figsize=(8, 4))
-        for p in gauges:
-            ax.plot(t_all, 1e3 * (p["values"] - (p["values"][keep].mean() if keep.any() else 0.0)), lw=0.8,
-                    label=p["name"])
-        name, eta, r, f = results[-1]
-        if len(t):
-            ax.plot(t, 1e3 * eta, "k-", lw=0.8, label=f"{name}, without its drift")
-        if len(r["times"]):
-            ax.plot(r["times"], 1e3 * r["amplitudes"], "k.", ms=4, label=f"|{name}| peaks")
-        ax.axvline(args.after, color="0.6", ls="--", lw=0.8)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("surface elevation [mm]")
+        plot_free(m, ax)
+        name, _, _, f = m["series"][-1]
         ax.set_title(f"{name}: T = {_fmt(f['period'])} s (linear theory {t_theory:.4f} s), "
                      f"zeta = {_fmt(f['zeta'], '.4f')}")
         ax.legend(fontsize=8)
@@ -307,64 +330,82 @@ def window_peaks(t, p, period, first=1, count=4):
     return out
 
 
-def roll(args) -> int:
-    run = open_run(args.run)
+def roll_compare(run, reference: Path = REFERENCE, probe: str | None = None, period: float = ROLL_PERIOD,
+                 shift: float = 0.0) -> dict:
+    """A run's pressure sensor against the experiment's record: {probe (its name), t_sim,
+    p_sim, upper (ta, pa), lower (tb, pb), T, shift, peaks: [(t_sim, p_sim, p_sim over 5 ms,
+    t_exp, p_exp, midline)] for the windows T .. 5 T, peaks_5ms: [(t, p)] of the record
+    averaged over 5 ms in the same windows, mae (Pa, 0 to 4 T against the
+    midline), spread (Pa, the two series' mean half-distance), span (the samples compared)}.
+    Raises RunError where the run has no such pressure probe or the record cannot be read."""
     data = run.probes()
     pressure = [p for p in data["probes"] if p["kind"] == "pressure"]
-    if args.probe is not None:
-        pressure = [p for p in pressure if p["name"] == args.probe]
+    if probe is not None:
+        pressure = [p for p in pressure if p["name"] == probe]
     if not pressure:
-        raise RunError(f"{run.dir}: no pressure probe" + (f" named {args.probe!r}" if args.probe else ""))
-    probe = pressure[0]
-    t_sim, p_sim = data["t"] + args.shift, np.asarray(probe["values"], float)
-    (ta, pa), (tb, pb) = read_reference(args.reference)
-    T = args.period
+        raise RunError(f"{run.dir}: no pressure probe" + (f" named {probe!r}" if probe else ""))
+    sensor = pressure[0]
+    t_sim, p_sim = data["t"] + shift, np.asarray(sensor["values"], float)
+    (ta, pa), (tb, pb) = read_reference(reference)
+    T = period
     exp_a = np.interp(t_sim, ta, pa, left=np.nan, right=np.nan)
     exp_b = np.interp(t_sim, tb, pb, left=np.nan, right=np.nan)
     exp = 0.5 * (exp_a + exp_b)
     # the experiment's mean on its own fine grid, for its peaks
     grid = np.union1d(ta, tb)
     exp_grid = 0.5 * (np.interp(grid, ta, pa) + np.interp(grid, tb, pb))
-    sim_peaks = window_peaks(t_sim, p_sim, T)
-    smooth_peaks = window_peaks(t_sim, smooth(t_sim, p_sim, SMOOTH_PEAK), T)
-    exp_peaks = window_peaks(ta, pa, T)
-    mid_peaks = window_peaks(grid, exp_grid, T)
-    print(f"sensor {probe['name']!r} against {Path(args.reference).name}, roll period T = {T:g} s"
+    smoothed = window_peaks(t_sim, smooth(t_sim, p_sim, SMOOTH_PEAK), T)
+    peaks = [(ts, ps, pq, te, pe, pm) for (ts, ps), (_, pq), (te, pe), (_, pm) in
+             zip(window_peaks(t_sim, p_sim, T), smoothed, window_peaks(ta, pa, T), window_peaks(grid, exp_grid, T))]
+    window = (t_sim >= 0.0) & (t_sim <= 4 * T) & np.isfinite(exp)
+    mae = float(np.mean(np.abs(p_sim[window] - exp[window]))) if window.any() else math.nan
+    spread = float(np.mean(0.5 * np.abs(exp_a[window] - exp_b[window]))) if window.any() else math.nan
+    span = (t_sim[window][0], t_sim[window][-1]) if window.any() else (math.nan, math.nan)
+    return {"probe": sensor["name"], "t_sim": t_sim, "p_sim": p_sim, "upper": (ta, pa), "lower": (tb, pb), "T": T,
+            "shift": shift, "peaks": peaks, "peaks_5ms": smoothed, "mae": mae, "spread": spread, "span": span}
+
+
+def plot_roll(m: dict, ax) -> None:
+    """The experiment's two series, the run's sensor and both sides' peaks on ``ax`` (Pa against s)."""
+    (ta, pa), (tb, pb), t_sim = m["upper"], m["lower"], m["t_sim"]
+    ax.plot(ta, pa, "-", color="0.75", lw=0.6, label="experiment, upper series")
+    ax.plot(tb, pb, "-", color="0.55", lw=0.6, label="experiment, lower series")
+    ax.plot(t_sim, m["p_sim"], "C0-", lw=0.9, label=f"sphcore {m['probe']}")
+    for ts, ps, _, te, pe, _ in m["peaks"]:
+        if np.isfinite(ts):
+            ax.plot(ts, ps, "C0o", ms=4)
+        if np.isfinite(te):
+            ax.plot(te, pe, "ks", ms=4)
+    ax.set_xlim(0, max(t_sim[-1] if len(t_sim) else 0.0, 5 * m["T"]))
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("pressure [Pa]")
+
+
+def roll(args) -> int:
+    run = open_run(args.run)
+    m = roll_compare(run, args.reference, args.probe, args.period, args.shift)
+    T, t_sim = m["T"], m["t_sim"]
+    print(f"sensor {m['probe']!r} against {Path(args.reference).name}, roll period T = {T:g} s"
           + (f", simulation delayed by {args.shift:g} s" if args.shift else ""))
     print(f"p_sim: the largest sample; 5 ms: the largest of the record averaged over {1e3 * SMOOTH_PEAK:g} ms; "
           "p_exp: the upper series' largest; midline: the largest of the two series' mean")
     print(f"{'peak':>4} {'window [s]':>11} {'t_sim':>7} {'p_sim [Pa]':>10} {'5 ms':>6} {'t_exp':>7} "
           f"{'p_exp [Pa]':>10} {'midline':>8} {'dt [s]':>7} {'p_sim/p_exp':>11}")
-    for k, ((ts, ps), (_, pq), (te, pe), (_, pm)) in enumerate(zip(sim_peaks, smooth_peaks, exp_peaks,
-                                                                   mid_peaks), 1):
+    for k, (ts, ps, pq, te, pe, pm) in enumerate(m["peaks"], 1):
         lo, hi = k * T, (k + 1) * T
         print(f"{k:>4} {f'{lo:.2f}-{hi:.2f}':>11} {_fmt(ts, '.3f'):>7} {_fmt(ps, '.0f'):>10} {_fmt(pq, '.0f'):>6} "
               f"{_fmt(te, '.3f'):>7} {_fmt(pe, '.0f'):>10} {_fmt(pm, '.0f'):>8} {_fmt(ts - te, '+.3f'):>7} "
               f"{_fmt(ps / pe if pe else math.nan, '.2f'):>11}"
               + (" (the run ends inside this window)" if np.isfinite(ts) and t_sim[-1] < hi else ""))
-    window = (t_sim >= 0.0) & (t_sim <= 4 * T) & np.isfinite(exp)
-    mae = float(np.mean(np.abs(p_sim[window] - exp[window]))) if window.any() else math.nan
-    spread = float(np.mean(0.5 * np.abs(exp_a[window] - exp_b[window]))) if window.any() else math.nan
-    span = (t_sim[window][0], t_sim[window][-1]) if window.any() else (math.nan, math.nan)
+    span = m["span"]
     print(f"mean absolute error, t = {_fmt(span[0], '.3f')} to {_fmt(span[1], '.3f')} s (first four periods "
-          f"within the run): {_fmt(mae, '.1f')} Pa against the midline; the experiment's upper and lower series lie "
-          f"{_fmt(spread, '.1f')} Pa from it on average")
+          f"within the run): {_fmt(m['mae'], '.1f')} Pa against the midline; the experiment's upper and lower series lie "
+          f"{_fmt(m['spread'], '.1f')} Pa from it on average")
     if not args.no_plot:
         plt = pyplot()
         fig, ax = plt.subplots(figsize=(9, 4))
-        ax.plot(ta, pa, "-", color="0.75", lw=0.6, label="experiment, upper series")
-        ax.plot(tb, pb, "-", color="0.55", lw=0.6, label="experiment, lower series")
-        ax.plot(t_sim, p_sim, "C0-", lw=0.9, label=f"sphcore {probe['name']}")
-        for ts, ps in sim_peaks:
-            if np.isfinite(ts):
-                ax.plot(ts, ps, "C0o", ms=4)
-        for te, pe in exp_peaks:
-            if np.isfinite(te):
-                ax.plot(te, pe, "ks", ms=4)
-        ax.set_xlim(0, max(t_sim[-1] if len(t_sim) else 0.0, 5 * T))
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("pressure [Pa]")
-        ax.set_title(f"SPHERIC test 10, sensor 1: MAE (0-4T) = {_fmt(mae, '.0f')} Pa")
+        plot_roll(m, ax)
+        ax.set_title(f"SPHERIC test 10, sensor 1: MAE (0-4T) = {_fmt(m['mae'], '.0f')} Pa")
         ax.legend(fontsize=8, loc="upper left")
         fig.tight_layout()
         png = run.dir / ROLL_PNG

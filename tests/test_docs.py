@@ -22,8 +22,15 @@ TEXT = {".py", ".md", ".toml", ".txt", ".rst", ".cfg", ".sh", ".json", ".yml", "
 SKIP = {".git", "__pycache__", "_build", "build", "dist", "runs", ".hypothesis", ".pytest_cache", ".venv"}
 
 
+#: the project's own folders and files: a virtual environment or a user's runs beside them
+#: are not the project's text
+OWN = ("sphcore", "plugins", "cases", "tests", "postprocessing", "docs", "validation", "benchmarks", "examples", ".ci")
+OWN_FILES = ("README.md", "pyproject.toml", "setup.py")
+
+
 def _sources():
-    for path in sorted(ROOT.rglob("*")):
+    paths = [ROOT / f for f in OWN_FILES] + [p for d in OWN for p in (ROOT / d).rglob("*")]
+    for path in sorted(paths):
         rel = path.relative_to(ROOT)
         if (set(rel.parts) & SKIP or rel.parts[0].endswith(".egg-info") or not path.is_file()
                 or any(p.startswith("output") or p.startswith("sweep") for p in rel.parts[2:3])):

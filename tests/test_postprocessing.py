@@ -86,8 +86,9 @@ def png(path):
 
 
 def test_the_toolkit_is_these_scripts():
-    """A script added to postprocessing/ joins the tests below; runs.py is their shared reader."""
-    assert sorted(p.name for p in SCRIPTS.glob("*.py")) == sorted(TOOLKIT + ["runs.py"])
+    """A script added to postprocessing/ joins the tests below; runs.py is their shared reader
+    and wave_theory.py the wave maker's linear theory (modules, not commands)."""
+    assert sorted(p.name for p in SCRIPTS.glob("*.py")) == sorted(TOOLKIT + ["runs.py", "wave_theory.py"])
 
 
 @pytest.mark.parametrize("name", TOOLKIT)

@@ -47,6 +47,18 @@ def script(*args):
 # ---------------------------------------------------------------------------- linear theory
 
 
+def test_the_theory_stands_alone_and_is_the_scripts():
+    """postprocessing/wave_theory.py needs no run and no sibling (the validation pages load
+    it by itself); the script measures against the same functions."""
+    path = SCRIPT.parent / "wave_theory.py"
+    spec = importlib.util.spec_from_file_location("wave_theory_alone", path)
+    theory = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(theory)
+    for name in ("wavenumber", "biesel", "flap", "group_velocity", "evanescent_wavenumbers", "havelock"):
+        assert getattr(wf, name).__code__.co_code == getattr(theory, name).__code__.co_code, name
+    assert theory.havelock(2 * math.pi / 1.1494, 0.25, 0.032)["amplitude"] == pytest.approx(29.34, abs=0.01)
+
+
 def test_biesel_goes_from_kh_in_shallow_water_to_two_in_deep_water():
     kh = np.array([1e-3, 1e-2, 0.05])
     assert np.all(np.abs(wf.biesel(kh) / kh - 1.0) < kh ** 2)  # H/S = kh (1 + O(kh^2))

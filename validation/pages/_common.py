@@ -44,12 +44,14 @@ def plugins_set(plugins: list[str]) -> str:
 
 
 def case_digest(case_dir: Path) -> str:
-    """SHA-256 of the case's files (case.toml and anything beside it the case may read,
-    output folders left out): a run made from an edited case is not reused."""
+    """SHA-256 of the case's files (case.toml and anything beside it the case may read;
+    output folders and the README, the case's notes, left out): a run made from an edited
+    case is not reused."""
     h = hashlib.sha256()
     for f in sorted(case_dir.rglob("*")):
         rel = f.relative_to(case_dir)
-        if not f.is_file() or rel.parts[0].startswith(("output", "sweep")) or "__pycache__" in rel.parts:
+        if (not f.is_file() or rel.parts[0].startswith(("output", "sweep")) or "__pycache__" in rel.parts
+                or rel.name == "README.md"):
             continue
         h.update(str(rel).encode() + b"\0" + f.read_bytes() + b"\0")
     return h.hexdigest()
