@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 from runs import RunError, open_run, refuse
+from sphcore_plugins.vtu import read_pvd
 
 PROG = Path(__file__).name
 FIELDS = {"pressure": ("pressure [Pa]", "turbo"), "velocity": ("speed [m/s]", "viridis"),
@@ -38,8 +39,7 @@ WALL_COLOUR = "#404040"
 def pvd_frames(pvd: Path) -> list[tuple[float, Path]]:
     """(t in s, .vtu path) of every frame a collection lists."""
     try:
-        root = ET.parse(pvd).getroot()
-        frames = [(float(e.get("timestep")), pvd.parent / e.get("file")) for e in root.iter("DataSet")]
+        frames = [(t, pvd.parent / f) for t, f in read_pvd(pvd)]
     except (OSError, ET.ParseError, TypeError, ValueError) as err:
         raise RunError(f"{pvd}: not a readable collection of frames ({err})") from None
     if not frames:

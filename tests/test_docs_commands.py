@@ -163,7 +163,9 @@ def line_matches(shown: str, printed: str) -> bool:
     if m is None:
         return False
     numbers = [p for p in pieces if isinstance(p, float)]
-    return all(float(got) == pytest.approx(want, rel=0.05, abs=1e-4) for want, got in zip(numbers, m.groups()))
+    # a run prints the same figures on any machine (the same bits on any thread count): the
+    # allowance is for the last digits a library version may move, not for a changed result
+    return all(float(got) == pytest.approx(want, rel=0.01, abs=1e-4) for want, got in zip(numbers, m.groups()))
 
 
 def missing_output(shown: list[str], printed: str) -> str | None:
@@ -250,6 +252,7 @@ def test_output_matching():
     assert line_matches("x: t = 0.3 s, 5579 steps, 4.08 s wall, 3.55e+06 particle-steps/s, peak memory 176 MB",
                         "x:  t = 0.3 s, 5600 steps, 9.1 s wall, 1e5 particle-steps/s, peak memory 1760 MB")
     assert not line_matches("x: 5579 steps", "x: 6579 steps")
+    assert not line_matches("err_cruchaga_0.20s 0.0723", "err_cruchaga_0.20s 0.0745")  # 3 % off: a changed result
     assert not line_matches("5579 steps", "x: 5579 steps")  # a shown line is a whole printed line
     assert line_matches("ok; output: .../cases/dam_break/output", "ok; output: /tmp/x/cases/dam_break/output")
     assert line_matches("P1: max 39889.7 Pa -> run/probe_P1.png", "P1: max 40100 Pa -> run/probe_P1.png")

@@ -12,14 +12,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import PIL.Image as PIL  # Pillow comes with pyvista and matplotlib, dependencies of sphcore
 import pytest
 
 from sphcore import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "postprocessing" / "render.py"
-PIL = pytest.importorskip("PIL.Image")
-pytest.importorskip("pyvista")
 
 
 def render(*args):
