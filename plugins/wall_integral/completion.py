@@ -94,11 +94,6 @@ def complete(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1, a2, d
     a0 -= cp * w0 + ch * h0
     a1 -= cp * w1 + ch * h1
     a2 -= cp * w2 + ch * h2
-    if moving:  # what the walls gave the particle: its reaction is their load
-        wall.react[i, 0] = -(cp * w0 + ch * h0)
-        wall.react[i, 1] = -(cp * w1 + ch * h1)
-        if dim == 3:
-            wall.react[i, 2] = -(cp * w2 + ch * h2)
     vw = vel[i, 0] * w0 + vel[i, 1] * w1
     if dim == 3:
         vw += vel[i, 2] * w2

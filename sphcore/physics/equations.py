@@ -204,12 +204,16 @@ def _sph_rates(n_dest, src, grid, prm, L, wall, acc, drho, work, spos, nth):
                 s = 2 * u + phase
                 _slab_pairs(slab_start[s], slab_start[s + 1], n_dest, src, grid, prm, L, wall, acc, drho, work,
                             spos, buf[k], rows[k], gat[k], out[k])
+    # the reaction array is taken out of the tuple here, outside the loop: numba 0.68 drops
+    # the writes a prange body makes through a tuple's field when the writing function is
+    # inlined (measured: a 3D run of 54,528 particles left it all zero)
+    react = wall.react
     if n_dest >= PARALLEL_MIN:
         for i in prange(n_dest):
-            _finish(i, dim, WALLS, src, prm, wall, acc, drho, work)
+            _finish(i, dim, WALLS, src, prm, wall, react, acc, drho, work)
     else:
         for i in range(n_dest):
-            _finish(i, dim, WALLS, src, prm, wall, acc, drho, work)
+            _finish(i, dim, WALLS, src, prm, wall, react, acc, drho, work)
 
 
 @njit(cache=True, inline="always")
@@ -299,17 +303,24 @@ def _no_completion(wall, i, dim, vel, rho_i, p_i, rho_ref, lam, gravity, a0, a1,
     return a0, a1, a2, dr
 
 
-def _finish(i, dim, walls, src, prm, wall, acc, drho, work):
+def _finish(i, dim, walls, src, prm, wall, react, acc, drho, work):
     """Gravity and the wall completion (COMPLETE, a constant of each twin) of particle i,
-    after all pairs."""
+    after all pairs. ``react`` (``wall.react``; empty unless walls move) receives the
+    acceleration the completion gave the particle, whose reaction is the walls' load."""
     rho, gravity = src.rho, prm.gravity
     a0 = acc[i, 0]
     a1 = acc[i, 1]
     a2 = acc[i, 2] if dim == 3 else 0.0
     dr = drho[i]
     if walls and wall.share[i] > 0.0:
+        b0, b1, b2 = a0, a1, a2
         a0, a1, a2, dr = COMPLETE(wall, i, dim, src.vel, rho[i], src.p[i], prm.rho_ref, prm.moment_norm,
                                   gravity, a0, a1, a2, dr, work[i, W_B], work[i, W_B + 1], work[i, W_B + 2], work[i, W_GAMMA])
+        if react.shape[0] > 0:
+            react[i, 0] = a0 - b0
+            react[i, 1] = a1 - b1
+            if dim == 3:
+                react[i, 2] = a2 - b2
     gscale = 1.0 - prm.rho0 / rho[i] if prm.modified_pressure else 1.0
     acc[i, 0] = gscale * gravity[0] + a0
     acc[i, 1] = gscale * gravity[1] + a1
