@@ -194,7 +194,8 @@ def open_run(path, kind: str | None = None) -> Run:
             config = json.loads(summary.read_text()).get("config") or {}
         except (OSError, ValueError, AttributeError) as err:
             raise RunError(f"{summary}: cannot read the run's summary: {err}") from None
-        if not isinstance(config, dict) or not all(isinstance(v, dict) for k, v in config.items() if k != "blocks"):
+        if not isinstance(config, dict) or not all(isinstance(v, dict) or (isinstance(v, list) and all(
+                isinstance(e, dict) for e in v)) for v in config.values()):
             raise RunError(f"{summary}: its config is not a validated case (expected section tables)")
     elif kind is not None:
         raise RunError(f"{d}: no summary.json (expected the output directory of a finished sph run)")

@@ -57,11 +57,17 @@ def _momentum(out):
 def test_a_body_thrown_into_free_water_keeps_the_momentum_of_both(tmp_path, plugins):
     """Zero gravity, no fixed wall reached: what the body loses the water gains, with the
     reflective contacts' impulses and with the wall model's pressure (its exact reaction)."""
-    run_case(tmp_path, THROWN.replace("PLUGINS", plugins))
+    run_case(tmp_path, THROWN.replace("PLUGINS", plugins[:-1] + ', "wall_loads"]') + "[wall_loads]\nevery_dt = 0.01\n")
     fluid, body, x = _momentum(tmp_path / "output")
     assert x[0] > 0.27  # it reached the water
     assert np.linalg.norm(fluid) > 1.0  # and gave it a good part of its 10 N s/m
     np.testing.assert_allclose(fluid + body, [10.0, 1.0], rtol=0, atol=1e-9)
+    # the loads file reports what the body took: its mean forces times their intervals add
+    # up to the body's change of momentum (from 10, 1 N s/m)
+    rows = np.loadtxt(tmp_path / "output" / "wall_loads.csv", delimiter=",", skiprows=2, ndmin=2)
+    impulse = (rows[1:, 1:3] * np.diff(rows[:, 0])[:, None]).sum(axis=0)
+    assert rows[-1, 0] == pytest.approx(0.15)
+    np.testing.assert_allclose(impulse, body - [10.0, 1.0], rtol=0, atol=1e-9)
 
 
 HEAVING = """

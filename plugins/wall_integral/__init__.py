@@ -179,7 +179,7 @@ class WallIntegralPlugin:
                 ctx.set_wall_force(name, force, moment)
         if self.plane_groups or self.face_groups:  # kept for the next step's load (restart too)
             ctx.kept(self)["loads"] = {name: [float(v) for v in f] + [float(v) for v in m]
-                                       for name, (f, m) in loads.items()}
+                                       for name, (f, m) in loads.items() if name not in self.bodies}
         ctx.stats(self)["near_wall_last"] = int(np.count_nonzero(terms.share))
 
     @hookimpl

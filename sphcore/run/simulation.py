@@ -192,6 +192,7 @@ class Simulation:
             self._body_loads()
         for name, body in self.bodies:  # half a kick and the drift: the walls at t + dt
             body.begin_step(ctx.t, ctx.dt, *ctx.wall_forces.get(name, none))
+            self._report_load(name, 0.5 * ctx.dt)
         ctx.contact_impulses.clear()
         integ.free_motion(ctx.dt)
         self.hooks.sph_after_integrate(ctx=ctx, pos0=integ.pos0, pos=st.pos, vel=st.vel, acc=integ.acc, dt=ctx.dt)
@@ -209,6 +210,7 @@ class Simulation:
             self._body_loads()
             for name, body in self.bodies:
                 body.end_step(*ctx.wall_forces.get(name, none))
+                self._report_load(name, 0.5 * ctx.dt)
             self.run.kept["bodies"] = {name: {**body.state(), "fluid_load": _six(ctx.wall_forces.get(name, none))}
                                        for name, body in self.bodies}
         ctx.step += 1
@@ -216,6 +218,12 @@ class Simulation:
             self.check()
         if not self.relaxing:  # gauges and probes sample the run, not its relaxation
             self.hooks.sph_after_step(ctx=ctx)
+
+    def _report_load(self, name: str, dt: float) -> None:
+        """The fluid's load on body ``name`` over ``dt`` (half a step: each half kick's), for
+        the ``wall_loads`` writer (``ctx.add_wall_load``; the contacts add theirs)."""
+        force, moment = self.ctx.wall_forces.get(name, (np.zeros(3), np.zeros(3)))
+        self.ctx.add_wall_load(name, np.asarray(force) * dt, np.asarray(moment) * dt)
 
     def _body_loads(self) -> None:
         """Each floating body's load at the last evaluation of the rates, where its walls'
