@@ -111,6 +111,13 @@ def test_bench_moving_prints_the_moving_tanks_cost_against_the_fixed_one():
     figure(*rows(rf"moving / fixed: ({NUM}) \(pairs ({NUM}) \.\. ({NUM})\)", out, 1)[0])
 
 
+def test_bench_body_prints_a_floating_bodys_cost_against_its_moving_wall():
+    out = output(script("speed/bench_body.py", "--n", 2000, "--steps", 2, "--pairs", 1))
+    for name in ("moving", "body"):
+        figure(*rows(rf"{name}\s+({NUM})\s+({NUM})", out, 1)[0])
+    figure(*rows(rf"body / moving wall: ({NUM}) \(pairs ({NUM}) \.\. ({NUM})\)", out, 1)[0])
+
+
 def test_bench_output_prints_what_the_writers_cost():
     out = output(script("speed/bench_output.py", "--t-end", 0.01, "--scales", 1))
     (particles, frames, mb, with_s, without_s, share, ms_frame), = rows(

@@ -108,6 +108,7 @@ class WallIntegralPlugin:
                 moving[np.asarray(g.faces, np.int64)] = True
             self._fixed = np.flatnonzero(~moving)
         self._moving_faces = None  # per face group: (verts, grid arrays, stamps), built on first use
+        self._within = np.empty(0, np.int64)  # scratch: the particles near a body
         # one group holding every wall (a tank): its load from the fluid's momentum balance
         nf = self.walls.count if self.walls is not None else 0
         self.tank = groups[0] if len(groups) == 1 and len(groups[0].planes) == case.planes.count \
@@ -159,21 +160,23 @@ class WallIntegralPlugin:
                 self._add_face_terms(ctx, terms)
             members = {}
             for k, g in enumerate(self.face_groups):
-                before = terms.grad.copy() if g.name in self.bodies else None
+                near = self._near_body(ctx, k, g) if g.name in self.bodies else None
+                before = terms.grad[near] if near is not None else None
                 force, moment = self._moving_face_terms(ctx, terms, k, g)
-                if before is not None:  # the particles this body's faces reach, and by how much
-                    part = np.sqrt(((terms.grad - before) ** 2).sum(axis=1))
-                    members[g.name] = part
+                if near is not None:  # the particles this body's faces reach, and by how much
+                    part = np.sqrt(((terms.grad[near] - before) ** 2).sum(axis=1))
+                    members[g.name] = (near, part)
                 if g.name in loads:  # the tank's walls: its planes and faces together
                     force, moment = force + loads[g.name][0], moment + loads[g.name][1]
                 loads[g.name] = (force, moment)
         if self.walls is not None and self.bodies:
             # each body's particles, weighted by the body's part of their wall gradient: the
             # load is the reaction of what the completion gives them (ctx.wall_members)
-            total = np.sqrt((terms.grad ** 2).sum(axis=1))
-            for name, part in members.items():
-                idx = np.flatnonzero(part > 0.0)
-                ctx.wall_members[name] = (idx, np.minimum(1.0, part[idx] / total[idx]))
+            for name, (near, part) in members.items():
+                reached = part > 0.0
+                idx = near[reached]
+                total = np.sqrt((terms.grad[idx] ** 2).sum(axis=1))
+                ctx.wall_members[name] = (idx, np.minimum(1.0, part[reached] / total))
         for name, (force, moment) in loads.items():
             if name not in self.bodies:  # a body's load is the exact reaction (the run sums it)
                 ctx.set_wall_force(name, force, moment)
@@ -227,19 +230,42 @@ class WallIntegralPlugin:
                           *self._load_coefs(ctx), terms.share, terms.grad, terms.hydro, terms.flux, terms.accel, load)
         return load_of(load, prm.dim)
 
-    def _moving_face_terms(self, ctx, terms, k, group):
-        """A moving group's faces in its own frame (:func:`.moving.moving_face_terms`)."""
+    def _near_body(self, ctx, k, group):
+        """The particles that body ``group``'s faces may reach: within the support of the
+        sphere round its centre that holds its faces (one compiled pass over the particles;
+        the body's share of their terms is then taken over these alone)."""
+        from .moving import within
+
+        st, prm = ctx.state, ctx.params
+        if self._moving_faces is None or self._moving_faces[k] is None:
+            self._moving_face_terms_setup(ctx, k, group)
+        verts = self._moving_faces[k][0]
+        pose = group.motion.pose(ctx.t)
+        reach = float(np.sqrt(((verts.reshape(-1, prm.dim) - pose.centre) ** 2).sum(axis=1).max())) + prm.support
+        if self._within.shape[0] < st.n:
+            self._within = np.empty(st.n + st.n // 4, np.int64)
+        count = within(st.pos, np.ascontiguousarray(pose.centre + pose.shift, dtype=np.float64), reach, self._within)
+        return self._within[:count].copy()
+
+    def _moving_face_terms_setup(self, ctx, k, group):
+        """The faces of moving group k in its own frame, their grid and marks (built once)."""
         from sphcore.api import build_grid
 
         from .facewalls import stamps_for
-        from .moving import empty_load, load_of, pose_arrays, moving_face_terms
 
-        st, prm = ctx.state, ctx.params
         if self._moving_faces is None:
             self._moving_faces = [None] * len(self.face_groups)
         if self._moving_faces[k] is None:
             verts = np.ascontiguousarray(self.walls.verts[np.asarray(group.faces, np.int64)], dtype=np.float64)
-            self._moving_faces[k] = (verts, build_grid(verts, prm.support).arrays(), stamps_for(verts.shape[0]))
+            self._moving_faces[k] = (verts, build_grid(verts, ctx.params.support).arrays(),
+                                     stamps_for(verts.shape[0]))
+
+    def _moving_face_terms(self, ctx, terms, k, group):
+        """A moving group's faces in its own frame (:func:`.moving.moving_face_terms`)."""
+        from .moving import empty_load, load_of, pose_arrays, moving_face_terms
+
+        st, prm = ctx.state, ctx.params
+        self._moving_face_terms_setup(ctx, k, group)
         verts, grid, stamps = self._moving_faces[k]
         pose = group.motion.pose(ctx.t)
         rot, centre, origin, vel, acc, omega, alpha = pose_arrays(pose, prm.dim)

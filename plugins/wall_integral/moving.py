@@ -317,3 +317,20 @@ def load_of(load, dim):
 def empty_load():
     return np.zeros((LOAD_ROWS, 6))
 
+
+
+@njit(cache=True)
+def within(pos, centre, radius, out):
+    """The particles within ``radius`` of ``centre`` (a bounding sphere of a group's faces
+    grown by the support): their indices in ``out``, in order; the count."""
+    r2 = radius * radius
+    count = 0
+    for i in range(pos.shape[0]):
+        d2 = 0.0
+        for d in range(pos.shape[1]):
+            x = pos[i, d] - centre[d]
+            d2 += x * x
+        if d2 <= r2:
+            out[count] = i
+            count += 1
+    return count
