@@ -198,3 +198,46 @@ def test_a_held_body_takes_its_buoyancy_in_a_run_of_many_particles(tmp_path):
     expected = 1000.0 * 9.81 * 0.1 * 0.025
     assert abs(fy - expected) < 0.002 / 0.025 * expected, fy
     assert abs(fx) < 1e-3 * expected  # the box and the water are symmetric about x = 0.3
+
+
+@pytest.mark.parametrize("dim, orientation", [(2, [30.0]), (2, [-90.0]), (3, [0.0, 0.0, 90.0]), (3, [20.0, 10.0, 0.0])])
+def test_an_oriented_body_is_drawn_turned_about_its_centre_of_mass(dim, orientation):
+    """``orientation`` turns the wall about its centre of mass before the fluid is built: the
+    mass and centre do not change, every vertex keeps its distance from the centre, the
+    angle turned is the one given, and no particle starts inside the turned body."""
+    from sphcore.testing import context
+
+    lo, hi = ([0.4, 0.4], [0.7, 0.5]) if dim == 2 else ([0.4, 0.4, 0.4], [0.7, 0.5, 0.55])
+    top = [1.0] * dim
+    case = (f"[case]\nname = \"turned\"\ndim = {dim}\n[domain]\nmin = {[0.0] * dim}\nmax = {top}\n"
+            f"[[domain.walls]]\nshape = \"box\"\nmin = {lo}\nmax = {hi}\n"
+            f"[[bodies]]\nwall = 0\ndensity = 500.0\nORIENT\n"
+            f"[[blocks]]\nmin = {[0.0] * dim}\nmax = {top}\n[particles]\ndx = 0.02\n[time]\nt_end = 0.1\n"
+            "[plugins]\nuse = [\"reflective\"]\n")
+    drawn = context(case.replace("ORIENT", ""))
+    turned = context(case.replace("ORIENT", f"orientation = {orientation}"))
+    a, b = (c.case.moving[0].motion.body for c in (drawn, turned))
+    assert a.mass == pytest.approx(b.mass, rel=1e-12)
+    np.testing.assert_allclose(a.x, b.x, atol=1e-12)
+    va, vb = drawn.case.faces.verts.reshape(-1, dim), turned.case.faces.verts.reshape(-1, dim)
+    np.testing.assert_allclose(np.linalg.norm(va - a.x, axis=1), np.linalg.norm(vb - b.x, axis=1), atol=1e-12)
+    # about the axis (z in 2D) each vertex's arm keeps its part along the axis and turns its
+    # part across it by the angle given, counter-clockwise seen from the axis' tip
+    rv = np.radians(np.r_[0.0, 0.0, orientation] if dim == 2 else np.asarray(orientation))
+    k = rv / np.linalg.norm(rv)
+    arms = [np.c_[v - c.x, np.zeros((len(v), 3 - dim))] for v, c in ((va, a), (vb, b))]
+    np.testing.assert_allclose(arms[0] @ k, arms[1] @ k, atol=1e-12)
+    across = [arm - np.outer(arm @ k, k) for arm in arms]
+    sin = np.cross(across[0], across[1]) @ k
+    cos = (across[0] * across[1]).sum(axis=1)
+    np.testing.assert_allclose(np.arctan2(sin, cos), np.linalg.norm(rv), atol=1e-12)
+    assert turned.case.faces.in_fluid(turned.state.pos).all()
+    assert not drawn.case.faces.in_fluid(turned.state.pos).all() or np.allclose(va, vb)
+
+
+def test_an_orientation_of_the_wrong_length_is_refused():
+    from sphcore.errors import CaseError
+    from sphcore.testing import context
+
+    with pytest.raises(CaseError, match=r"bodies\[0\]\.orientation"):
+        context(HEAVING.replace("velocity = [0.0, 0.05]", "orientation = [0.0, 5.0]"))

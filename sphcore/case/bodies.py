@@ -11,6 +11,7 @@ fluid's loads, gravity and its springs move.
     density = 500.0                   # kg/m^3 (or mass)
     free = ["y"]                      # heave only; all axes when unset
     rotation = "fixed"                # or free, or hinge (hinge_point, hinge_axis in 3D)
+    orientation = [5.0]               # heeled 5 deg about its centre of mass (3D: a rotation vector)
 
 The mass, centre of mass and inertia follow from the wall's own faces for the uniform
 density (:mod:`sphcore.geometry.massprops`). Each body is a moving wall group named
@@ -41,6 +42,20 @@ def _vector(file, key, value, n):
     return v
 
 
+def _turn(file, key, value, dim) -> np.ndarray:
+    """The rotation matrix of ``orientation`` (degrees): an angle in 2D, a rotation vector in 3D."""
+    v = np.radians(_vector(file, key, value, 1 if dim == 2 else 3))
+    if dim == 2:
+        c, s = np.cos(v[0]), np.sin(v[0])
+        return np.array([[c, -s], [s, c]])
+    angle = float(np.linalg.norm(v))
+    if angle == 0.0:
+        return np.eye(3)
+    k = v / angle
+    cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * cross + (1.0 - np.cos(angle)) * cross @ cross  # Rodrigues
+
+
 def parse_bodies(file, cfg, dim, ranges, faces, taken, planes) -> list[MovingGroup]:
     """The body groups of the case. ``ranges``: each wall's faces; ``taken``: the walls'
     indices that already move (a prescribed motion or the tank's); ``planes``: the case's
@@ -65,6 +80,10 @@ def parse_bodies(file, cfg, dim, ranges, faces, taken, planes) -> list[MovingGro
                             "body is a box, a polygon or a closed mesh")
         if (b["density"] is None) == (b["mass"] is None):
             raise CaseError(file, f"{key}.density", "give the density or the mass, one of them")
+        if b["orientation"] is not None:  # the wall turned about its centre of mass, where the fluid is built
+            turn = _turn(file, f"{key}.orientation", b["orientation"], dim)
+            centre = massprops.of_faces(faces.verts[start:stop], 1.0).centre
+            faces.verts[start:stop] = (faces.verts[start:stop] - centre) @ turn.T + centre
         unit = massprops.of_faces(faces.verts[start:stop], 1.0)
         density = b["density"] if b["density"] is not None else b["mass"] / unit.size
         props = massprops.of_faces(faces.verts[start:stop], density)

@@ -170,6 +170,9 @@ BODY: dict[str, O] = {
     "mass": O(None, "float", "kg", "the body's mass (2D: per metre of span), the density then uniform",
               positive=True, nullable=True),
     "velocity": O(None, "vector", "m/s", "initial velocity of the centre of mass; zero when unset", nullable=True),
+    "orientation": O(None, "vector", "deg", "turns the wall about its centre of mass before the run (2D: [angle], "
+                     "counter-clockwise; 3D: a rotation vector, its direction the axis, its length the angle): "
+                     "a heeled box; the body's rotation is measured from there", nullable=True),
     "angular_velocity": O(None, "vector", "rad/s", "initial angular velocity (2D: [wz]; 3D: [wx, wy, wz]); "
                           "zero when unset", nullable=True),
     "free": O(None, "str_list", doc="the world axes the centre of mass may move along, e.g. [\"y\"] (heave only "
