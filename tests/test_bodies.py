@@ -241,3 +241,27 @@ def test_an_orientation_of_the_wrong_length_is_refused():
 
     with pytest.raises(CaseError, match=r"bodies\[0\]\.orientation"):
         context(HEAVING.replace("velocity = [0.0, 0.05]", "orientation = [0.0, 5.0]"))
+
+
+def test_each_body_knows_the_fixed_walls_and_the_other_bodies_it_must_not_enter():
+    """Two bodies, a fixed obstacle and a wall with a prescribed motion: each body's solids
+    are the obstacle's faces alone (not the bodies', not the moving wall's, which is not
+    where it is drawn), its others the other body."""
+    from sphcore.testing import context
+
+    walls = "".join(f"[[domain.walls]]\nshape = \"box\"\nmin = {lo}\nmax = {hi}\n"
+                    for lo, hi in (([0.1, 0.6], [0.2, 0.7]), ([0.4, 0.6], [0.5, 0.7]), ([0.7, 0.05], [0.9, 0.1]),
+                                   ([0.7, 0.6], [0.8, 0.7])))
+    case = ("[case]\nname = \"two\"\ndim = 2\n[domain]\nmin = [0.0, 0.0]\nmax = [1.0, 1.0]\n" + walls
+            + "[[domain.walls.motion]]\ntype = \"sine_translation\"\naxis = [1.0, 0.0]\namplitude = 0.01\n"
+            "period = 1.0\n[[bodies]]\nwall = 0\ndensity = 500.0\n[[bodies]]\nwall = 1\ndensity = 800.0\n"
+            "[[blocks]]\nmin = [0.0, 0.0]\nmax = [1.0, 0.3]\n[particles]\ndx = 0.02\n[time]\nt_end = 0.1\n"
+            "[plugins]\nuse = [\"reflective\"]\n")
+    ctx = context(case)
+    bodies = [g.motion for g in ctx.case.moving if g.name.startswith("bodies")]
+    assert len(bodies) == 2
+    obstacle = ctx.case.faces.verts[8:12]
+    for k, m in enumerate(bodies):
+        np.testing.assert_array_equal(np.sort(m.solids.verts.reshape(-1, 2), axis=0),
+                                      np.sort(obstacle.reshape(-1, 2), axis=0))
+        assert m.others == [bodies[1 - k]]

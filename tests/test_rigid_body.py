@@ -236,3 +236,88 @@ def test_the_rotation_vector_gives_back_the_axis_and_angle(ax, ay, az, angle):
     assert np.allclose(got, want, atol=1e-6) or (angle > 3.1 and np.allclose(got, -want, atol=1e-3))
     assert rotation_vector(np.array([[math.cos(0.3), -math.sin(0.3)], [math.sin(0.3), math.cos(0.3)]]))[2] == \
         pytest.approx(0.3)
+
+
+def _box_faces(lo, hi):
+    """The 2D box [lo, hi] as a closed wall with the fluid outside."""
+    from sphcore.geometry.faces import closed_wall
+
+    c = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
+    return closed_wall(np.stack([c, np.roll(c, -1, axis=0)], axis=1), fluid_inside=False)
+
+
+def _box_body(lo, hi, density, velocity, rotation="fixed", free=(1.0, 1.0), restitution=0.5, gravity=(0.0, 0.0)):
+    from sphcore.geometry import massprops
+    from sphcore.physics.bodymotion import BodyMotion
+
+    props = massprops.box(lo, hi, density)
+    body = RigidBody(2, props.mass, props.centre, props.inertia, props.centre.copy(), np.array(velocity, float),
+                     free=list(free), rotation=rotation)
+    faces = _box_faces(lo, hi).verts
+    corners = np.unique(faces.reshape(-1, 2), axis=0)
+    return BodyMotion(body, np.array(gravity), restitution, corners, None, 0.0, faces)
+
+
+@pytest.mark.parametrize("restitution", [0.0, 0.5, 1.0])
+def test_a_box_dropped_on_a_fixed_obstacle_never_enters_it_and_bounces_with_its_restitution(restitution):
+    """No fluid: a 2D box (heave only) falls 0.1 m onto the top face (y = 0.05) of a fixed
+    box wall: none of its vertices ever ends inside the obstacle, and it leaves the first
+    contact with -e times the speed it hit at."""
+    motion = _box_body([0.4, 0.15], [0.6, 0.25], 500.0, [0.0, 0.0], free=(0.0, 1.0), restitution=restitution,
+                       gravity=(0.0, -9.81))
+    motion.solids = _box_faces([0.3, 0.0], [0.7, 0.05])
+    dt, vs = 1e-4, []
+    for k in range(4000):
+        motion.begin_step(k * dt, dt, np.zeros(2), np.zeros(3))
+        motion.end_step(np.zeros(2), np.zeros(3))
+        assert motion.solids.signed_distance(motion.world_vertices()).min() >= -1e-12
+        vs.append(motion.body.v[1])
+    hit = math.sqrt(2 * 9.81 * 0.1)
+    first = next(k for k in range(1, len(vs)) if vs[k] > vs[k - 1])
+    assert vs[first - 1] == pytest.approx(-hit, rel=2e-3)
+    assert vs[first] == pytest.approx(restitution * hit, rel=2e-3, abs=2 * 9.81 * dt)
+    assert motion.contacts >= 1
+
+
+@pytest.mark.parametrize("restitution", [0.0, 0.5, 1.0])
+@pytest.mark.parametrize("rotation, offset", [("fixed", 0.0), ("free", 0.03)])
+def test_two_bodies_that_collide_exchange_momentum_and_never_overlap(restitution, rotation, offset):
+    """No fluid, no gravity: two boxes of different masses slide at each other along x
+    (the second one offset in y, free to turn: an oblique hit). Their total momentum and
+    angular momentum about the origin are the same after the collision as before (the
+    impulses are equal and opposite, to round-off), the kinetic energy does not grow, no
+    vertex of one ever ends inside the other, and head on the normal relative speed after
+    is -e times the speed before. Free to turn, the total angular momentum about the origin
+    keeps to the part the overlap's removal moves (each contact moves the two apart by its
+    depth, at most one step's approach, about their common centre of mass: at most
+    mu |v_rel| dt |v_rel| per contact, mu the reduced mass); head on nothing moves it."""
+    a = _box_body([0.1, 0.4], [0.3, 0.5], 500.0, [1.0, 0.0], rotation, restitution=restitution)
+    b = _box_body([0.5, 0.42 + offset], [0.6, 0.52 + offset], 900.0, [-0.5, 0.0], rotation, restitution=restitution)
+    a.others, b.others = [b], [a]
+
+    def totals():
+        p = sum(m.body.mass * m.body.v for m in (a, b))
+        ang = sum(m.body.mass * (m.body.x[0] * m.body.v[1] - m.body.x[1] * m.body.v[0]) + m.body.L[2]
+                  for m in (a, b))
+        ke = sum(0.5 * m.body.mass * m.body.v @ m.body.v + 0.5 * m.body.omega()[2] * m.body.L[2] for m in (a, b))
+        return p, ang, ke
+
+    p0, l0, e0 = totals()
+    dt = 1e-4
+    for k in range(3000):
+        for m in (a, b):
+            m.begin_step(k * dt, dt, np.zeros(2), np.zeros(3))
+        for m in (a, b):
+            m.end_step(np.zeros(2), np.zeros(3))
+        assert a.world_faces().signed_distance(b.world_vertices()).min() >= -1e-12
+        assert b.world_faces().signed_distance(a.world_vertices()).min() >= -1e-12
+    p1, l1, e1 = totals()
+    assert a.contacts + b.contacts >= 1
+    np.testing.assert_allclose(p1, p0, rtol=0, atol=1e-12)
+    mu = a.body.mass * b.body.mass / (a.body.mass + b.body.mass)
+    bound = 1e-12 if offset == 0.0 else (a.contacts + b.contacts) * mu * 1.5 * dt * 1.5
+    if rotation == "free":
+        assert abs(l1 - l0) <= bound
+    assert e1 <= e0 * (1 + 1e-12)
+    if rotation == "fixed":
+        assert b.body.v[0] - a.body.v[0] == pytest.approx(restitution * 1.5, rel=1e-9, abs=1e-12)

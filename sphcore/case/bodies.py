@@ -28,6 +28,7 @@ from sphcore.case import defaults
 from sphcore.case.options import validate_table
 from sphcore.errors import CaseError
 from sphcore.geometry import massprops
+from sphcore.geometry.faces import Faces
 from sphcore.geometry.motion import MovingGroup
 from sphcore.physics.bodymotion import BodyMotion
 from sphcore.physics.rigid import Hinge, RigidBody, Spring
@@ -131,6 +132,17 @@ def parse_bodies(file, cfg, dim, ranges, faces, taken, planes) -> list[MovingGro
         reach = float(np.sqrt(((faces.verts[start:stop].reshape(-1, dim) - props.centre) ** 2).sum(1).max()))
         idx = np.arange(start, stop, dtype=np.int64)
         vertices = np.unique(faces.verts[start:stop].reshape(-1, dim), axis=0)
-        motion = BodyMotion(body, gravity, b["restitution"], vertices, (planes.normals, planes.points), b["release"])
+        motion = BodyMotion(body, gravity, b["restitution"], vertices, (planes.normals, planes.points), b["release"],
+                            faces.verts[start:stop].copy())
         groups.append(MovingGroup(key, motion, np.zeros(0, np.int64), idx, reach))
+    # what a body must not enter: the fixed closed walls (an obstacle, a tank of faces) and
+    # the other bodies; walls with a prescribed motion are left out (they are not where drawn)
+    solids = Faces.empty(dim)
+    for a, c, sign in faces.groups:
+        wall = next((w for w, (r0, r1) in enumerate(ranges) if r0 <= a < r1), None)
+        if wall is not None and wall not in seen and wall not in taken:
+            solids = solids.concat(Faces(np.ascontiguousarray(faces.verts[a:c]), ((0, c - a, sign),)))
+    for g in groups:
+        g.motion.solids = solids if solids.count else None
+        g.motion.others = [h.motion for h in groups if h is not g]
     return groups

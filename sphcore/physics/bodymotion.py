@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from sphcore.geometry.faces import Faces
 from sphcore.geometry.motion import Pose
 from sphcore.physics.rigid import RigidBody, cross3, cross_wr
 
@@ -30,19 +31,24 @@ from sphcore.physics.rigid import RigidBody, cross3, cross_wr
 class BodyMotion:
     """The motion of one floating body (``body``: :class:`sphcore.physics.rigid.RigidBody`)
     under ``gravity`` (m/s^2), its springs and the fluid's loads; ``restitution`` of its
-    contacts with the fixed walls."""
+    contacts with the fixed walls and the other bodies."""
 
     t_last = math.inf
 
     def __init__(self, body: RigidBody, gravity: np.ndarray, restitution: float = 0.5, vertices=None, planes=None,
-                 release: float = 0.0):
+                 release: float = 0.0, faces=None):
         self.dim = body.dim
         self.release = release  # held until then
         self.restitution = restitution
         #: the body's vertices (reference frame) and the fixed planes (normals, points) they stay inside
         self.vertices = np.zeros((0, body.dim)) if vertices is None else np.asarray(vertices, float)
         self.planes = planes
-        self.contacts = 0  # contacts with the fixed walls so far
+        #: the body's faces (reference frame, (nf, dim, dim)); the fixed walls' closed faces
+        #: (:class:`Faces`, or None) and the other bodies it must not enter
+        self.faces = np.zeros((0, body.dim, body.dim)) if faces is None else np.asarray(faces, float)
+        self.solids = None
+        self.others: list[BodyMotion] = []
+        self.contacts = 0  # contacts with the fixed walls and the other bodies so far
         self.held = False
         self.body = body
         self.gravity = np.asarray(gravity, float)[: body.dim]
@@ -90,49 +96,131 @@ class BodyMotion:
         self._contact()
         self._end = self._now()
 
-    def _contact(self, sweeps: int = 4) -> None:
-        """Keep the body's vertices inside the fixed planes: for the deepest vertex past a
-        plane, an impulse along the plane's normal that reverses its normal velocity times
-        the restitution, 1/m_eff = 1/m + n . (I^-1 (r x n)) x r, and a shift back to
-        the plane (the body's free axes only)."""
-        if self.planes is None or not len(self.vertices):
+    # -- contacts ------------------------------------------------------------------------------
+
+    def world_vertices(self) -> np.ndarray:
+        """The body's vertices where it is now (n, dim)."""
+        b = self.body
+        return b.x + (self.vertices - b.centre_ref) @ b.R.T
+
+    def world_faces(self) -> Faces:
+        """The body's faces where it is now, a closed wall with the fluid outside."""
+        b = self.body
+        verts = b.x + (self.faces - b.centre_ref) @ b.R.T
+        return Faces(np.ascontiguousarray(verts), ((0, verts.shape[0], 1),))
+
+    def velocity_at(self, point) -> np.ndarray:
+        """The velocity (m/s) of the body's point at ``point`` (zero while it is held)."""
+        if self.held:
+            return np.zeros(self.dim)
+        b = self.body
+        return b.v + cross_wr(b.omega(), np.asarray(point, float) - b.x)
+
+    def inverse_mass(self, n, point) -> float:
+        """The velocity change along n of the body's point at ``point`` per unit impulse
+        along n there: 1/m + n . (I^-1 (r x n)) x r on the free axes, arm^2 / I_h on a
+        hinge; zero while it is held."""
+        if self.held:
+            return 0.0
+        b = self.body
+        if b.rotation == "hinge":
+            arm = float(b.hinge.axis @ cross3(np.asarray(point, float) - b.hinge.pivot, n))
+            return arm * arm / b.hinge_inertia()
+        r = np.asarray(point, float) - b.x
+        turn = 0.0
+        if b.rotation == "free":
+            rn = cross3(r, n)
+            inv = np.linalg.solve(b.inertia_world(), rn) if self.dim == 3 else rn / b.inertia_ref[0, 0]
+            turn = float(n @ cross_wr(inv, r))
+        return float((b.free * n) @ n) / b.mass + turn
+
+    def push(self, j, n, point) -> None:
+        """An impulse j n (N s) at ``point``."""
+        if self.held:
             return
         b = self.body
-        normals, points = self.planes
-        for _ in range(sweeps):
-            R = b.R
-            x = b.x + (self.vertices - b.centre_ref) @ R.T
+        if b.rotation == "hinge":
+            arm = float(b.hinge.axis @ cross3(np.asarray(point, float) - b.hinge.pivot, n))
+            b.kick(np.zeros(self.dim), j * arm * b.hinge.axis, 1.0)
+        else:
+            b.kick(j * n, j * cross3(np.asarray(point, float) - b.x, n), 1.0)
+
+    def _deepest(self):
+        """The deepest penetration of this body into a fixed wall or another body, as
+        (depth < 0 m, n: the direction that separates this body, the contact point, the
+        other body or None), or None: its vertices against the tank's planes and the fixed
+        walls' faces, its vertices inside another body and that body's inside it."""
+        x = self.world_vertices()
+        best = None
+
+        def take(depth, n, point, other):
+            nonlocal best
+            if depth < 0.0 and (best is None or depth < best[0]):
+                best = (float(depth), np.asarray(n, float), np.asarray(point, float), other)
+
+        if self.planes is not None and len(self.planes[0]):
+            normals, points = self.planes
             d = np.einsum("vpd,pd->vp", x[:, None, :] - points[None, :, :], normals)
-            v_idx, p_idx = np.unravel_index(np.argmin(d), d.shape)
-            depth = d[v_idx, p_idx]
-            if depth >= 0.0:
+            v, k = np.unravel_index(np.argmin(d), d.shape)
+            take(d[v, k], normals[k], x[v], None)
+        if self.solids is not None and self.solids.count:
+            d = self.solids.signed_distance(x)
+            v = int(np.argmin(d))
+            if d[v] < 0.0:
+                take(d[v], self.solids.normal_at(x[v:v + 1])[0], x[v], None)
+        for other in self.others:
+            theirs = other.world_faces()
+            d = theirs.signed_distance(x)
+            v = int(np.argmin(d))
+            if d[v] < 0.0:
+                take(d[v], theirs.normal_at(x[v:v + 1])[0], x[v], other)
+            xo = other.world_vertices()
+            mine = self.world_faces()
+            d = mine.signed_distance(xo)
+            v = int(np.argmin(d))
+            if d[v] < 0.0:
+                take(d[v], -mine.normal_at(xo[v:v + 1])[0], xo[v], other)
+        return best
+
+    def _contact(self, sweeps: int = 4) -> None:
+        """Keep the body out of the fixed walls and the other bodies: for the deepest
+        penetration (:meth:`_deepest`), an impulse along its normal that reverses the
+        points' approach speed times the restitution, j = -(1 + e) v_n / (1/m_eff + 1/m_eff'),
+        given to both bodies (equal and opposite), and a shift of this body back out (its
+        free axes; a hinge takes the impulse only). A few sweeps for the next deepest."""
+        if not len(self.vertices):
+            return
+        b = self.body
+        for _ in range(sweeps):
+            found = self._deepest()
+            if found is None:
                 return
-            n, r = normals[p_idx], x[v_idx] - b.x
-            w = b.omega()
-            vn = float(n @ (b.v + cross_wr(w, r)))
-            if b.rotation == "hinge":  # turn about the hinge only; the hinge holds the rest
-                a = b.hinge.axis
-                arm = float(a @ cross3(x[v_idx] - b.hinge.pivot, n))
-                if vn < 0.0 and arm != 0.0:
-                    j = -(1.0 + self.restitution) * vn / (arm * arm / b.hinge_inertia())
-                    b.kick(np.zeros(self.dim), j * arm * a, 1.0)
-                    self.contacts += 1
-                    continue
-                return
+            depth, n, point, other = found
+            vn = float(n @ (self.velocity_at(point) - (other.velocity_at(point) if other is not None
+                                                         else np.zeros(self.dim))))
+            applied = False
             if vn < 0.0:
-                rn = cross3(r, n)
-                if b.rotation == "free":
-                    inv = np.linalg.solve(b.inertia_world(), rn) if self.dim == 3 else rn / b.inertia_ref[0, 0]
-                    turn = float(n @ cross_wr(inv, r))
-                else:
-                    turn = 0.0
-                free_n = b.free * n
-                m_inv = float(free_n @ n) / b.mass + turn
+                m_inv = self.inverse_mass(n, point) + (other.inverse_mass(-n, point) if other is not None else 0.0)
                 if m_inv > 0.0:
                     j = -(1.0 + self.restitution) * vn / m_inv
-                    b.kick(j * n, j * rn, 1.0)
-            b.x = b.x - depth * b.free * n
+                    self.push(j, n, point)
+                    if other is not None:
+                        other.push(j, -n, point)
+                    applied = True
+            if b.rotation == "hinge":  # the hinge holds its place: an impulse or nothing
+                if not applied:
+                    return
+                self.contacts += 1
+                continue
             self.contacts += 1
+            if other is None or other.held or other.body.rotation == "hinge":
+                b.x = b.x - depth * b.free * n
+            else:  # both move back, their common centre of mass where it was
+                share = other.body.mass / (b.mass + other.body.mass)
+                b.x = b.x - share * depth * b.free * n
+                other.body.x = other.body.x + (1.0 - share) * depth * other.body.free * n
+                if other._start is not None:  # it has drifted already: its end of the step moved
+                    other._end = other._now()
 
     def impulse(self, impulse, angular_impulse) -> None:
         """The contact impulses of the step (N s, N m s about the centre of mass)."""
@@ -164,13 +252,14 @@ class BodyMotion:
     def state(self) -> dict:
         b = self.body
         return {"x": b.x.tolist(), "v": b.v.tolist(), "angle": b.angle, "quat": b.quat.tolist(), "L": b.L.tolist(),
-                "accel": self.accel.tolist(), "alpha": self.alpha.tolist()}
+                "accel": self.accel.tolist(), "alpha": self.alpha.tolist(), "contacts": self.contacts}
 
     def restore(self, s: dict) -> None:
         b = self.body
         b.x, b.v, b.angle = np.array(s["x"]), np.array(s["v"]), float(s["angle"])
         b.quat, b.L = np.array(s["quat"]), np.array(s["L"])
         self.accel, self.alpha = np.array(s["accel"]), np.array(s["alpha"])
+        self.contacts = int(s.get("contacts", 0))
         self._start = self._end = None
 
 

@@ -213,6 +213,9 @@ class Simulation:
                 self._report_load(name, 0.5 * ctx.dt)
             self.run.kept["bodies"] = {name: {**body.state(), "fluid_load": _six(ctx.wall_forces.get(name, none))}
                                        for name, body in self.bodies}
+            figures = ctx.stats("bodies")  # in summary.json: each body's contacts with walls and bodies so far
+            for name, body in self.bodies:
+                figures[name] = {"contacts": body.contacts}
         ctx.step += 1
         if self.checks_due.due(self.run.clock):
             self.check()
