@@ -184,7 +184,7 @@ BODY: dict[str, O] = {
     "release": O(0.0, "float", "s", "the body is held where case.toml draws it until this time (the water settles "
                  "round it), then the loads move it", min=0.0),
     "restitution": O(0.5, "float", doc="coefficient of restitution of the body's contacts with the fixed walls "
-                     "(0: plastic, 1: elastic)", min=0.0, extra={"max": 1.0}),
+                     "and the other bodies (0: plastic, 1: elastic)", min=0.0, extra={"max": 1.0}),
     "springs": O([], "table_list", doc="linear springs and dashpots to fixed anchors, a simple mooring (keys: "
                  "SPRING)"),
 }
