@@ -28,9 +28,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))  # run from a checkout without installing
 
-from sphcore.run import runner  # noqa: E402
-from sphcore.run.build import build  # noqa: E402
-from sphcore.testing import case_with, tiny_case, write_case  # noqa: E402
+from sphcore.run import runner
+from sphcore.run.build import build
+from sphcore.testing import case_with, tiny_case, write_case
 
 WIDTH, DEPTH, BEAM, HEIGHT = 2.0, 0.5, 0.2, 0.1
 HEAVE = [{"type": "sine_translation", "axis": [0.0, 1.0], "amplitude": 0.005, "period": 0.8}]
