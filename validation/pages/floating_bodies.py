@@ -245,7 +245,7 @@ def build(runs: Path, figures: Path, rerun: bool) -> str:
             if m is None:
                 rows.append([label, f"{1e3 * gm:+.1f}", theory_t, status(s), "-", "-", "-", "-"])
                 continue
-            rows.append([label, f"{1e3 * gm:+.1f}", theory_t, status(s), f"{m['period']:.3f}",
+            rows.append([label, f"{1e3 * gm:+.1f}", theory_t, status(s), f"{m['period']:.3f}" if gm > 0 else "-",
                          f"{m['largest']:.1f}", f"{m['final']:.1f}", f"{s['wall_time_s']:.0f}"])
         md += [(f"\n### Roll stability, `heeled_box` (square {SQUARE:g} m, heeled {HEEL:g} deg, released at "
                 f"{ROLL_RELEASE:g} s)\n"),
