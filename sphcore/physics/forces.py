@@ -177,6 +177,16 @@ class Forces:
         pid = int(ctx.state.id[far]) if far < ctx.state.n else -1
         raise Instability(ctx.step, ctx.t, pid, f"neighbour search failed: {e}") from None
 
+    def wall_terms_last(self) -> WallTerms:
+        """The wall terms of the last evaluation (for studies of the wall model; read only)."""
+        return self._wall
+
+    def work_last(self) -> np.ndarray:
+        """The per-particle scratch of the last evaluation's pair loop, in particle order
+        (columns: sphcore.physics.pairterms.W_*; the wall completion's near-wall sums among
+        them); read only."""
+        return self._work
+
     def wall_react(self):
         """The acceleration the wall completion gave each particle at the last evaluation
         (``WallTerms.react``, runs with moving walls), or None."""
