@@ -111,7 +111,7 @@ def plot(t, y, te, ye, fit, name, axis, png):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("run", help="a run's output directory")
     ap.add_argument("--body", help="the group name (default: the only body or moving wall in the file)")
     ap.add_argument("--axis", default="y", choices=AXES, help="the coordinate (default y)")

@@ -20,7 +20,7 @@ from sphcore.testing import case_with, run_case
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTS = ROOT / "postprocessing"
 TOOLKIT = ["wavefront.py", "pressure_profile.py", "probes.py", "spheric_test2.py", "peer_series.py", "sloshing.py",
-           "wave_flume.py", "render.py"]
+           "wave_flume.py", "render.py", "body_motion.py"]
 # the validation scripts a user runs (validation/build.py and the studies validation/<case>/*.py);
 # validation/pages/ holds the build's page modules, not scripts, and validation/runs/ its runs
 STUDIES = sorted(p.relative_to(ROOT) for p in (ROOT / "validation").rglob("*.py")
@@ -86,9 +86,11 @@ def png(path):
 
 
 def test_the_toolkit_is_these_scripts():
-    """A script added to postprocessing/ joins the tests below; runs.py is their shared reader
-    and wave_theory.py the wave maker's linear theory (modules, not commands)."""
-    assert sorted(p.name for p in SCRIPTS.glob("*.py")) == sorted(TOOLKIT + ["runs.py", "wave_theory.py"])
+    """A script added to postprocessing/ joins the tests below; runs.py is their shared reader,
+    wave_theory.py the wave maker's linear theory and heave_theory.py a floating box's
+    (modules that read no run; heave_theory's own tests check its command)."""
+    assert sorted(p.name for p in SCRIPTS.glob("*.py")) == sorted(TOOLKIT + ["runs.py", "wave_theory.py",
+                                                                              "heave_theory.py"])
 
 
 @pytest.mark.parametrize("name", TOOLKIT)

@@ -31,12 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))  # run from a checkout without installing
-
-from sphcore.physics.pairterms import W_GAMMA  # noqa: E402
-from sphcore.run import runner  # noqa: E402
-from sphcore.run.build import build  # noqa: E402
+from sphcore.physics.pairterms import W_GAMMA
+from sphcore.run import runner
+from sphcore.run.build import build
 
 TANK = """
 [case]
