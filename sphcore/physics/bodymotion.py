@@ -145,6 +145,13 @@ class BodyMotion:
         else:
             b.kick(j * n, j * cross3(np.asarray(point, float) - b.x, n), 1.0)
 
+    def shift(self, dx) -> None:
+        """Move the body by dx (m): a contact's removal of an overlap. A body that has
+        drifted already this step ends the step there."""
+        self.body.x = self.body.x + np.asarray(dx, float)
+        if self._start is not None:
+            self._end = self._now()
+
     def _deepest(self):
         """The deepest penetration of this body into a fixed wall or another body, as
         (depth < 0 m, n: the direction that separates this body, the contact point, the
@@ -218,9 +225,7 @@ class BodyMotion:
             else:  # both move back, their common centre of mass where it was
                 share = other.body.mass / (b.mass + other.body.mass)
                 b.x = b.x - share * depth * b.free * n
-                other.body.x = other.body.x + (1.0 - share) * depth * other.body.free * n
-                if other._start is not None:  # it has drifted already: its end of the step moved
-                    other._end = other._now()
+                other.shift((1.0 - share) * depth * other.body.free * n)
 
     def impulse(self, impulse, angular_impulse) -> None:
         """The contact impulses of the step (N s, N m s about the centre of mass)."""
