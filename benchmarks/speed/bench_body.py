@@ -19,14 +19,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))  # run from a checkout without installing
+
+from bench_moving import alternate, report  # this script's folder is on the path
 
 from sphcore.run import runner
 from sphcore.run.build import build
@@ -60,23 +60,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         sims = {m: simulation(Path(tmp), m, args.n, m == "body") for m in ("moving", "body")}
-        for sim in sims.values():
-            sim.advance()  # compile, fill caches
-        per_step = {m: [] for m in sims}
-        for _ in range(args.pairs):
-            for m, sim in sims.items():
-                t0 = time.perf_counter()
-                for _ in range(args.steps):
-                    sim.advance()
-                per_step[m].append((time.perf_counter() - t0) / args.steps)
+        per_step = alternate(sims, args.steps, args.pairs)
         n = sims["moving"].state.n
-    ratios = [b / a for a, b in zip(per_step["moving"], per_step["body"])]
     print(f"2D tank, {n} particles, a box moving by a sine and floating, {args.pairs} pairs of {args.steps} steps")
-    print(f"{'':8s} {'ms/step':>10s} {'particle-steps/s':>17s}")
-    for m in sims:
-        t = statistics.median(per_step[m])
-        print(f"{m:8s} {1e3 * t:10.3f} {n / t:17.3g}")
-    print(f"body / moving wall: {statistics.median(ratios):.3f} (pairs {min(ratios):.3f} .. {max(ratios):.3f})")
+    report(per_step, n, "body / moving wall")
     return 0
 
 

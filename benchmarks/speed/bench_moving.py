@@ -51,24 +51,38 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         sims = {m: simulation(Path(tmp), m, args.n, args.plugins, m == "moving") for m in ("fixed", "moving")}
-        for sim in sims.values():
-            sim.advance()  # compile, fill caches
-        per_step = {m: [] for m in sims}
-        for _ in range(args.pairs):
-            for m, sim in sims.items():
-                t0 = time.perf_counter()
-                for _ in range(args.steps):
-                    sim.advance()
-                per_step[m].append((time.perf_counter() - t0) / args.steps)
+        per_step = alternate(sims, args.steps, args.pairs)
         n = sims["fixed"].state.n
-    ratios = [b / a for a, b in zip(per_step["fixed"], per_step["moving"])]
     print(f"2D tank, {n} particles, plugins {' '.join(args.plugins)}, {args.pairs} pairs of {args.steps} steps")
-    print(f"{'':8s} {'ms/step':>10s} {'particle-steps/s':>17s}")
-    for m in sims:
-        t = statistics.median(per_step[m])
-        print(f"{m:8s} {1e3 * t:10.3f} {n / t:17.3g}")
-    print(f"moving / fixed: {statistics.median(ratios):.3f} (pairs {min(ratios):.3f} .. {max(ratios):.3f})")
+    report(per_step, n, "moving / fixed")
     return 0
+
+
+def alternate(sims: dict, steps: int, pairs: int) -> dict:
+    """After a warm-up step each (compilation), ``pairs`` rounds of ``steps`` steps of each
+    simulation in turn; the seconds per step of each block, by name."""
+    for sim in sims.values():
+        sim.advance()  # compile, fill caches
+    per_step = {m: [] for m in sims}
+    for _ in range(pairs):
+        for m, sim in sims.items():
+            t0 = time.perf_counter()
+            for _ in range(steps):
+                sim.advance()
+            per_step[m].append((time.perf_counter() - t0) / steps)
+    return per_step
+
+
+def report(per_step: dict, n: int, ratio: str) -> None:
+    """The median time per step of each and the ratio of the second to the first (its
+    median over the pairs and their spread), as ``ratio`` names it."""
+    print(f"{'':8s} {'ms/step':>10s} {'particle-steps/s':>17s}")
+    for m, times in per_step.items():
+        t = statistics.median(times)
+        print(f"{m:8s} {1e3 * t:10.3f} {n / t:17.3g}")
+    first, second = per_step.values()
+    ratios = [b / a for a, b in zip(first, second)]
+    print(f"{ratio}: {statistics.median(ratios):.3f} (pairs {min(ratios):.3f} .. {max(ratios):.3f})")
 
 
 if __name__ == "__main__":
