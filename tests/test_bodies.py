@@ -265,3 +265,16 @@ def test_each_body_knows_the_fixed_walls_and_the_other_bodies_it_must_not_enter(
         np.testing.assert_array_equal(np.sort(m.solids.verts.reshape(-1, 2), axis=0),
                                       np.sort(obstacle.reshape(-1, 2), axis=0))
         assert m.others == [bodies[1 - k]]
+
+
+@pytest.mark.parametrize("case", ["floating_box", "heave_decay", "heeled_box", "floating_box_3d"])
+def test_the_shipped_body_cases_pass_check(case):
+    """``sph check`` of every shipped case with a body exits 0 and says ok."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    res = subprocess.run([sys.executable, "-m", "sphcore.cli", "check", str(root / "cases" / case)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0 and ": ok: " in res.stdout, res.stderr
