@@ -14,6 +14,11 @@ evaluation, so their momentum is exchanged, not made.
 
 The acceleration the pose gives (a_w, for the hydrostatic extrapolation at a wall) is
 the body's at the last kick.
+
+After each drift the body's contacts are resolved (:meth:`BodyMotion._contact`): its
+vertices against the tank's planes, the fixed walls' closed faces (``solids``) and the
+other bodies (``others``), and theirs against it, with impulses of restitution that two
+bodies share equally and oppositely.
 """
 
 from __future__ import annotations
