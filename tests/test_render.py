@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import PIL.Image as PIL  # Pillow comes with pyvista and matplotlib, dependencies of sphcore
+import PIL.Image as PIL  # Pillow: in the test extra (it also comes with matplotlib and pyvista)
 import pytest
 
 from sphcore import cli

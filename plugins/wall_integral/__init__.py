@@ -237,11 +237,8 @@ class WallIntegralPlugin:
         from .moving import within
 
         st, prm = ctx.state, ctx.params
-        if self._moving_faces is None or self._moving_faces[k] is None:
-            self._moving_face_terms_setup(ctx, k, group)
-        verts = self._moving_faces[k][0]
         pose = group.motion.pose(ctx.t)
-        reach = float(np.sqrt(((verts.reshape(-1, prm.dim) - pose.centre) ** 2).sum(axis=1).max())) + prm.support
+        reach = group.reach + prm.support  # the faces' largest distance from the centre, from the case
         if self._within.shape[0] < st.n:
             self._within = np.empty(st.n + st.n // 4, np.int64)
         count = within(st.pos, np.ascontiguousarray(pose.centre + pose.shift, dtype=np.float64), reach, self._within)
