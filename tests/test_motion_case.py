@@ -69,6 +69,22 @@ def test_a_samples_file_is_read_with_comments_a_header_and_any_separator(tmp_pat
     assert pose.shift[0] == pytest.approx(0.01 * math.sin(0.015), rel=1e-6) and pose.shift[1] == 0.0
 
 
+def test_scale_multiplies_a_files_values_so_an_angle_measured_the_other_way_round_turns_the_other_way(tmp_path):
+    """rotation_file with scale = -1 turns by minus the file's angle (a flap whose measured angle
+    is positive towards the water); translation_file with scale = 0.001 reads millimetres."""
+    rows = "".join(f"{t:.3f} {2.0 * t:.6f}\n" for t in np.linspace(0, 0.01, 11))
+    turned = {}
+    for scale in (1.0, -1.0):
+        case = _load(tmp_path, {"domain.motion": [{"type": "rotation_file", "file": "flap.dat", "centre": [0.0, 0.0],
+                                                   "scale": scale}]}, {"flap.dat": rows})
+        r = case.moving[0].motion.pose(0.005).rotation
+        turned[scale] = math.degrees(math.atan2(r[1, 0], r[0, 0]))
+    assert turned[1.0] == pytest.approx(0.01, rel=1e-9) and turned[-1.0] == pytest.approx(-turned[1.0], rel=1e-12)
+    case = _load(tmp_path, {"domain.motion": [{"type": "translation_file", "file": "mm.dat", "axis": [1, 0],
+                                               "scale": 0.001}]}, {"mm.dat": rows})
+    assert case.moving[0].motion.pose(0.005).shift[0] == pytest.approx(1e-5, rel=1e-9)
+
+
 def test_a_samples_file_that_is_a_pipe_or_a_device_is_refused_at_once(tmp_path):
     """A FIFO or a link to /dev/zero as the samples file: refused naming the key, no hang."""
     import os

@@ -63,6 +63,8 @@ PART: dict[str, O] = {
     "centre": O(None, "vector", "m", "rotations: the centre of rotation, in the case's (reference) frame",
                 nullable=True),
     "file": O(None, "str", doc="file parts: the samples, relative to the case directory", nullable=True),
+    "scale": O(1.0, "float", doc="file parts: a factor on the file's values (-1: the opposite sense, as when "
+               "a file's angle is measured the other way round; 0.001: millimetres)"),
     "ramp": O(0.0, "float", "s", "duration of the smooth start (0: none)", min=0.0),
     "ramp_start": O(0.0, "float", "s", "when the ramp starts (no motion before it)", min=0.0),
 }
@@ -71,9 +73,9 @@ PART: dict[str, O] = {
 TAKES = {
     "constant_velocity": (("velocity",), ()),
     "sine_translation": (("axis", "amplitude"), ("period", "frequency", "phase")),
-    "translation_file": (("file",), ("axis",)),
+    "translation_file": (("file",), ("axis", "scale")),
     "sine_rotation": (("centre", "amplitude"), ("axis", "period", "frequency", "phase")),
-    "rotation_file": (("file", "centre"), ("axis",)),
+    "rotation_file": (("file", "centre"), ("axis", "scale")),
 }
 
 
@@ -191,6 +193,7 @@ def parse_motion(file, key: str, parts: list, dim: int, case_dir: Path | None, t
             path = (Path(case_dir) / p["file"]) if case_dir is not None else Path(p["file"])
             if kind == "translation_file":
                 t, values = read_samples(path, file, f"{pkey}.file", (1, dim))
+                values = values * p["scale"]
                 if values.shape[1] == 1:
                     if p["axis"] is None:
                         raise CaseError(file, f"{pkey}.axis", f"required: {path} has one value column, "
@@ -201,7 +204,7 @@ def parse_motion(file, key: str, parts: list, dim: int, case_dir: Path | None, t
                 translations.append(TranslationSeries(Spline(t, values), ramp))
             else:
                 t, values = read_samples(path, file, f"{pkey}.file", (1,))
-                rotation = RotationSeries(Spline(t, np.radians(values)), ramp)
+                rotation = RotationSeries(Spline(t, np.radians(values * p["scale"])), ramp)
             if t[0] > 0.0 or t[-1] < t_end:
                 raise CaseError(file, f"{pkey}.file", f"{path} covers t = {t[0]:g} to {t[-1]:g} s; the run needs "
                                 f"t = 0 to time.t_end = {t_end:g} s")
