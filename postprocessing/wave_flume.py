@@ -55,7 +55,8 @@ from pathlib import Path
 
 import numpy as np
 from runs import RunError, open_run, pyplot, refuse
-from wave_theory import biesel, evanescent_wavenumbers, flap, group_velocity, havelock, wavenumber  # noqa: F401
+from wave_theory import (biesel, evanescent_wavenumbers, flap, group_velocity, havelock,  # noqa: F401
+                         recorded_elevation, wavenumber)
 
 PROG = Path(__file__).name
 PNG = "wave_flume.png"

@@ -106,3 +106,27 @@ def havelock(omega, h, S, g=9.81, rho=1000.0, n=100) -> dict:
     return {"k": k, "kh": kh, "kj": kj, "added_mass": ma, "damping": B, "inertia": inertia,
             "radiation": radiation, "amplitude": math.hypot(inertia, radiation),
             "phase": math.atan2(radiation, -inertia), "power": 0.5 * B * (0.5 * omega * S) ** 2, "HS": hs}
+
+
+def recorded_elevation(t, stroke, h, x, transfer=flap, g=9.81, n_fft=None):
+    """The linear free-surface elevation (m) at distance x (m) down the flume from a wave
+    maker whose stroke at the still-water level (m, positive towards the water) was
+    recorded at the uniformly spaced times t: each Fourier component X e^{i omega t} of the
+    stroke makes the progressive wave (H/S)(kh) X i e^{i (omega t - k x)}, as the regular
+    wave of Dean & Dalrymple (ch. 6) does for X = S/2 sin(omega t): eta = H/2 cos(kx - omega t).
+    The evanescent modes are left out (they are gone a depth or two from the maker). The
+    record is zero-padded to n_fft samples (by default a power of two at least twice its
+    length, so that slow components do not come round again within it); returns eta at t."""
+    t = np.asarray(t, float)
+    n = t.size
+    dt = float(t[1] - t[0])
+    if n_fft is None:
+        n_fft = 1 << int(math.ceil(math.log2(2 * n)))
+    c = np.fft.rfft(np.asarray(stroke, float), n_fft)
+    omega = 2.0 * math.pi * np.fft.rfftfreq(n_fft, dt)
+    k = np.zeros_like(omega)
+    k[1:] = wavenumber(omega[1:], h, g)
+    kh = np.minimum(k * h, 20.0)  # no overflow; waves shorter than h / 3 carry H/S of kh = 20 (flap: 1.9, not 2)
+    ratio = np.zeros_like(kh)
+    ratio[1:] = transfer(kh[1:])
+    return np.fft.irfft(1j * ratio * c * np.exp(-1j * k * x), n_fft)[:n]

@@ -150,8 +150,10 @@ def _main(argv=None) -> int:
             except CaseError as e:  # as run says it: a key given on the command line names the option
                 raise runner.blame_option(e, args.overrides, args.t_end) from None
             dt = runner.first_step(sim, args.overrides, args.t_end)
+            clip = any(b["clip"] for b in case.blocks)
+            why = ("beyond a wall plane (clip), " if clip else "") + "inside a solid or closer than a radius to a face"
             walls = (f"{case.faces.count} wall faces ({sim.state.removed_by_walls} particles of the blocks "
-                     "not created: inside a solid or closer than a radius to a face), " if case.faces.count else "")
+                     f"not created: {why}), " if case.faces.count or clip else "")
             print(f"{case.file}: ok: {case.dim}D, {sim.state.n} particles, {case.planes.count} wall planes, {walls}"
                   f"h = {sim.params.h:.4g} m, c0 = {sim.params.c0:.4g} m/s, first dt ~ {dt:.3g} s, "
                   f"plugins: {', '.join(case.config['plugins']['use']) or 'none'}; output: {out.resolve()}")

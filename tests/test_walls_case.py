@@ -194,3 +194,28 @@ def test_ghosts_refuse_finite_walls_and_say_what_to_use(tmp_path):
         load(tmp_path, case)
     assert err.value.key == "domain.walls" and "mirrors across wall planes only" in err.value.expected
     assert "wall_integral" in err.value.expected
+
+
+def test_a_block_with_clip_leaves_out_the_particles_beyond_a_sloping_plane(tmp_path):
+    """Water over a beach: a 1:2 slope through the block. Without clip the first particle
+    beyond the plane is an error naming the block; with it, exactly the lattice's particles
+    at least a radius inside every plane are made, and a run from them keeps them inside."""
+    from sphcore.testing import tiny_case
+
+    beach = {"normal": [-0.5, 1.0], "point": [0.1, 0.0]}  # inside: above y = (x - 0.1) / 2
+    raw = case_with(tiny_case(), {"domain.planes": [beach], "blocks[0].max": [0.4, 0.1],
+                                  "plugins.use": ["reflective"], "time.t_end": 0.02})
+    with pytest.raises(CaseError) as err:
+        build(*load(tmp_path / "a", raw), None)
+    assert err.value.key == "blocks[0]" and "outside wall plane 4" in err.value.expected
+    case, pm = load(tmp_path / "b", case_with(raw, {"blocks[0].clip": True}))
+    sim = build(case, pm, None)
+    x = (np.arange(20) + 0.5) * 0.02
+    y = (np.arange(5) + 0.5) * 0.02
+    gx, gy = np.meshgrid(x, y, indexing="ij")
+    n = np.array([-0.5, 1.0]) / np.hypot(0.5, 1.0)
+    expect = int(((gx - 0.1) * n[0] + gy * n[1] >= 0.01 * (1 - 1e-9)).sum())
+    assert 0 < sim.state.n == expect < 100 and sim.state.removed_by_walls == 100 - expect
+    while not sim.done():
+        sim.advance()
+        assert np.all(case.planes.distances(sim.state.pos) >= sim.state.radius[:, None] * (1 - 1e-9))

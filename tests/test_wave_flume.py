@@ -54,9 +54,28 @@ def test_the_theory_stands_alone_and_is_the_scripts():
     spec = importlib.util.spec_from_file_location("wave_theory_alone", path)
     theory = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(theory)
-    for name in ("wavenumber", "biesel", "flap", "group_velocity", "evanescent_wavenumbers", "havelock"):
+    for name in ("wavenumber", "biesel", "flap", "group_velocity", "evanescent_wavenumbers", "havelock",
+                 "recorded_elevation"):
         assert getattr(wf, name).__code__.co_code == getattr(theory, name).__code__.co_code, name
     assert theory.havelock(2 * math.pi / 1.1494, 0.25, 0.032)["amplitude"] == pytest.approx(29.34, abs=0.01)
+
+
+def test_a_recorded_sine_stroke_makes_the_regular_wave_of_the_transfer_function():
+    """X = S/2 sin(omega t) over whole periods (no padding: the record is periodic) gives
+    eta = (H/S) S/2 cos(kx - omega t) at every x, for the piston and the flap; a stroke of
+    the opposite sign gives the opposite elevation."""
+    h, period, s = 0.4, 0.8, 0.03
+    omega = 2 * math.pi / period
+    t = np.arange(0, 10 * period, 0.01)[:1000]
+    stroke = 0.5 * s * np.sin(omega * t)
+    k = float(wf.wavenumber(omega, h))
+    for transfer in (wf.biesel, wf.flap):
+        for x in (0.0, 1.16, 2.66):
+            eta = wf.recorded_elevation(t, stroke, h, x, transfer, n_fft=t.size)
+            want = transfer(k * h) * 0.5 * s * np.cos(k * x - omega * t)
+            np.testing.assert_allclose(eta, want, atol=1e-12)
+            np.testing.assert_allclose(wf.recorded_elevation(t, -stroke, h, x, transfer, n_fft=t.size), -want,
+                                       atol=1e-12)
 
 
 def test_biesel_goes_from_kh_in_shallow_water_to_two_in_deep_water():

@@ -144,6 +144,8 @@ BLOCK: dict[str, O] = {
     "count": O(None, "list", doc="particles per axis instead of max (e.g. [36, 71])", nullable=True),
     "velocity": O(None, "vector", "m/s", "initial velocity; zero when unset", nullable=True),
     "kind": O("fluid", "str", doc="fluid (SPH) or sphere (rigid, only moved by integration)", choices=("fluid", "sphere")),
+    "clip": O(False, "bool", doc="true: leave out the lattice's particles beyond a wall plane (water over a "
+              "sloping beach); false: such a particle is an error naming the block"),
 }
 
 #: keys of one ``[[domain.walls]]`` entry

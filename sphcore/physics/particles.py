@@ -26,7 +26,8 @@ class ParticleState:
     radius: np.ndarray
     kind: np.ndarray
     id: np.ndarray
-    #: particles of the blocks not created because a finite wall covers them (not a field:
+    #: particles of the blocks not created because a finite wall covers them or, in a block
+    #: with ``clip``, they lie beyond a wall plane (not a field:
     #: no array, not saved; set by the filling)
     removed_by_walls = 0
 

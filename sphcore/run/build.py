@@ -81,13 +81,21 @@ def _relaxation(case) -> Simulation:
 
 def block_positions(case, k, b):
     """Centres of block k: its lattice, less the particles a finite wall removes (closer
-    than a radius to a face, or in a solid); (positions, removed count). A centre beyond
-    a wall plane is an error naming the block."""
+    than a radius to a face, or in a solid) and, with ``clip``, those beyond a wall plane;
+    (positions, removed count). Without ``clip`` a centre beyond a wall plane is an error
+    naming the block."""
     dx, r = case.dx, case.radius
     pos = lattice(b["min"], b["max"], dx, b["count"])
     if pos.shape[0] == 0:
         raise CaseError(case.file, f"blocks[{k}]", f"the block holds no particle at dx = {dx} m")
     d = case.planes.distances(pos)
+    clipped = 0
+    if b["clip"] and d.size:
+        inside = (d >= r * (1.0 - INSIDE_TOL)).all(axis=1)
+        if not inside.any():
+            raise CaseError(case.file, f"blocks[{k}].clip", "every particle of the block lies beyond a wall plane")
+        clipped = int(pos.shape[0] - inside.sum())
+        pos, d = pos[inside], d[inside]
     bad = np.argwhere(d < r * (1.0 - INSIDE_TOL))
     if bad.size:
         i, p = bad[0]
@@ -99,12 +107,12 @@ def block_positions(case, k, b):
         raise CaseError(case.file, f"blocks[{k}]", f"particle at {pos[i].round(9).tolist()} is outside wall plane {p} "
                         f"(distance {d[i, p]:.6g} m < radius {r:.6g} m){_rounding_hint(k, b, dx, pos[i])}")
     if case.faces.count == 0:
-        return pos, 0
+        return np.ascontiguousarray(pos), clipped
     keep = (case.faces.distances(pos) >= r * (1.0 - INSIDE_TOL)) & case.faces.in_fluid(pos)
     if not keep.any():
         raise CaseError(case.file, f"blocks[{k}]", "every particle of the block lies in a solid wall or "
                         "closer than a radius to a wall face")
-    return np.ascontiguousarray(pos[keep]), int(pos.shape[0] - keep.sum())
+    return np.ascontiguousarray(pos[keep]), clipped + int(pos.shape[0] - keep.sum())
 
 
 def _rounding_hint(k, b, dx, x) -> str:
@@ -128,8 +136,9 @@ def _rounding_hint(k, b, dx, x) -> str:
 
 
 def build_state(case) -> ParticleState:
-    """Particles of every [[blocks]] entry; each must lie inside every wall plane, and those a
-    finite wall covers are not created (``state.removed_by_walls`` counts them)."""
+    """Particles of every [[blocks]] entry; each must lie inside every wall plane (or, with
+    ``clip``, is left out), and those a finite wall covers are not created
+    (``state.removed_by_walls`` counts both)."""
     r, rho0 = case.radius, case.config["fluid"]["rho0"]
     state = ParticleState.empty(case.dim)
     removed = 0
