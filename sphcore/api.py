@@ -11,7 +11,8 @@
   :data:`FLUID`, :data:`SPHERE`, :data:`GHOST`;
 - geometry: :class:`Planes`, and for numba kernels :func:`plane_distance`,
   :func:`particle_distance`, :func:`normal_parts`; finite walls :class:`Faces` (``ctx.case.faces``) with their
-  :class:`FaceGrid` (:func:`build_grid`), and for numba kernels :func:`nearest_point`,
+  :class:`FaceGrid` (:func:`build_grid`), and for numba kernels :func:`nearest_point` (and
+  :func:`nearest_feature`, which also says which part of the face holds it),
   :func:`box_cells`,
   :func:`face_distance`, :func:`first_contact` (swept sphere), :func:`cell_span`;
   :func:`outline` (the faces of the region planes enclose, for drawing); walls that move:
@@ -36,7 +37,7 @@ from __future__ import annotations
 
 from sphcore.case.options import Option, validate_table
 from sphcore.errors import CaseError, Instability, OutputError
-from sphcore.geometry.facegeom import face_distance, first_contact, nearest_point
+from sphcore.geometry.facegeom import face_distance, first_contact, nearest_feature, nearest_point
 from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
 from sphcore.geometry.faces import Faces
 from sphcore.geometry.motion import Motion, MovingGroup, Pose, plane_groups, planes_at
@@ -59,7 +60,8 @@ __all__ = [
     "hookimpl", "Option", "CaseError", "Instability", "OutputError",
     "RunContext", "Params", "ParticleState", "Sources", "Fields", "WallTerms", "FLUID", "SPHERE", "GHOST",
     "Planes", "plane_distance", "particle_distance", "normal_parts", "outline", "Motion", "MovingGroup", "Pose", "plane_groups", "planes_at", "tank_load",
-    "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "face_distance", "first_contact",
+    "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "nearest_feature", "face_distance",
+    "first_contact",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",
     "KERNEL_IDS", "CUBIC_SPLINE", "WENDLAND_C2", "validate_table",
     "eos", "ScheduledWriter", "check_series", "leading_complete", "new_record", "record_frame", "Schedule", "schedule_options", "write_atomically", "mark_written", "by_size", "on_threads_by_size",

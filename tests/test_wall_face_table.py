@@ -11,7 +11,7 @@ import pytest
 from sphcore.api import build_grid
 from sphcore.testing import case_with, context
 from sphcore_plugins.wall_integral.facetable import build_table, table_wall_terms
-from sphcore_plugins.wall_integral.facewalls import face_wall_terms, point_terms, stamps_for
+from sphcore_plugins.wall_integral.facewalls import face_wall_terms, flat_parts, point_terms, stamps_for
 
 SQUARE_2D = {
     "case": {"dim": 2},
@@ -39,7 +39,7 @@ def _setup(case):
     prm = ctx.params
     verts = np.ascontiguousarray(ctx.case.faces.verts, dtype=np.float64)
     grid = build_grid(verts, prm.support).arrays()
-    table = build_table(verts, grid, prm.kernel_id, prm.h, prm.gravity, 0.25 * prm.h, 10 ** 7)
+    table = build_table(verts, flat_parts(verts), grid, prm.kernel_id, prm.h, prm.gravity, 0.25 * prm.h, 10 ** 7)
     return ctx, verts, grid, table
 
 
@@ -51,8 +51,8 @@ def _both(ctx, verts, grid, table, pts):
         return np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros(n), np.zeros((n, dim, dim))
 
     exact, tab = arrays(), arrays()
-    face_wall_terms(pts, verts, *grid, stamps_for(verts.shape[0]), 1, prm.kernel_id, prm.h, prm.gravity, 1.0,
-                    *exact)
+    face_wall_terms(pts, verts, flat_parts(verts), *grid, stamps_for(verts.shape[0]), 1, prm.kernel_id, prm.h,
+                    prm.gravity, 1.0, *exact)
     table_wall_terms(pts, table.lo, table.inv, table.shape, table.tab, 1.0, *tab)
     return exact, tab
 
@@ -112,7 +112,8 @@ def test_inside_a_solid_the_table_continues_s_smoothly():
     ctx, verts, grid, table = _setup(BOX_3D)
     prm = ctx.params
     xs = 0.4 + np.linspace(-0.02, 0.02, 41)  # across the box's face x = 0.4, at mid-height
-    s_exact = np.array([point_terms(x, 0.2, 0.05, 3, verts, *grid, stamps_for(verts.shape[0])[:1], 0, m,
+    flat = flat_parts(verts)
+    s_exact = np.array([point_terms(x, 0.2, 0.05, 3, verts, flat, *grid, stamps_for(verts.shape[0])[:1], 0, m,
                                     prm.kernel_id, prm.h, prm.gravity, np.zeros((3, 3)))[1]
                         for m, x in enumerate(xs)])
     assert s_exact[0] < -0.05 and s_exact[-1] > 0  # the jump of the formulas

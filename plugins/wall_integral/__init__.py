@@ -92,7 +92,7 @@ class WallIntegralPlugin:
             raise CaseError(file, "plugins.use", "wall_integral needs walls ([domain] min/max, planes or walls)")
         self.normals = np.ascontiguousarray(case.planes.normals, dtype=np.float64)
         self.offsets = np.ascontiguousarray(case.planes.offsets, dtype=np.float64)
-        self._faces = None  # (verts, grid arrays, stamps), built on first use (the grid needs h)
+        self._faces = None  # (verts, flat parts, grid arrays, stamps, table), built on first use (the grid needs h)
         self._epoch = 0
         # walls that move (sphcore.geometry.motion.MovingGroup): the tank's planes follow
         # ctx.planes; each group's faces get their own grid in the group's frame (.moving)
@@ -107,7 +107,7 @@ class WallIntegralPlugin:
             for g in self.face_groups:
                 moving[np.asarray(g.faces, np.int64)] = True
             self._fixed = np.flatnonzero(~moving)
-        self._moving_faces = None  # per face group: (verts, grid arrays, stamps), built on first use
+        self._moving_faces = None  # per face group: (verts, flat parts, grid arrays, stamps), built on first use
         self._within = np.empty(0, np.int64)  # scratch: the particles near a body
         # one group holding every wall (a tank): its load from the fluid's momentum balance
         nf = self.walls.count if self.walls is not None else 0
@@ -248,13 +248,13 @@ class WallIntegralPlugin:
         """The faces of moving group k in its own frame, their grid and marks (built once)."""
         from sphcore.api import build_grid
 
-        from .facewalls import stamps_for
+        from .facewalls import flat_parts, stamps_for
 
         if self._moving_faces is None:
             self._moving_faces = [None] * len(self.face_groups)
         if self._moving_faces[k] is None:
             verts = np.ascontiguousarray(self.walls.verts[np.asarray(group.faces, np.int64)], dtype=np.float64)
-            self._moving_faces[k] = (verts, build_grid(verts, ctx.params.support).arrays(),
+            self._moving_faces[k] = (verts, flat_parts(verts), build_grid(verts, ctx.params.support).arrays(),
                                      stamps_for(verts.shape[0]))
 
     def _moving_face_terms(self, ctx, terms, k, group):
@@ -263,7 +263,7 @@ class WallIntegralPlugin:
 
         st, prm = ctx.state, ctx.params
         self._moving_face_terms_setup(ctx, k, group)
-        verts, grid, stamps = self._moving_faces[k]
+        verts, flat, grid, stamps = self._moving_faces[k]
         pose = group.motion.pose(ctx.t)
         rot, centre, origin, vel, acc, omega, alpha = pose_arrays(pose, prm.dim)
         world = self._gravity3(prm)
@@ -272,7 +272,7 @@ class WallIntegralPlugin:
         full = float(self._table[1][self._table[1].shape[0] - 1, 2])
         load = empty_load()
         self._epoch += 2  # two marks a particle (moving_face_terms)
-        moving_face_terms(st.pos, rot, centre, origin, vel, acc, omega, alpha, verts, *grid, stamps, self._epoch,
+        moving_face_terms(st.pos, rot, centre, origin, vel, acc, omega, alpha, verts, flat, *grid, stamps, self._epoch,
                           prm.kernel_id, prm.h, gravity, world, full, *self._load_coefs(ctx), terms.share, terms.grad,
                           terms.hydro, terms.fill, terms.normals, terms.flux, terms.accel, load)
         return load_of(load, prm.dim)
@@ -282,7 +282,7 @@ class WallIntegralPlugin:
         from sphcore.api import build_grid
 
         from .facetable import build_table, table_wall_terms
-        from .facewalls import face_wall_terms, stamps_for
+        from .facewalls import face_wall_terms, flat_parts, stamps_for
 
         st, prm = ctx.state, ctx.params
         full = float(self._table[1][self._table[1].shape[0] - 1, 2])  # interior lattice sum
@@ -290,13 +290,14 @@ class WallIntegralPlugin:
             verts = self.walls.verts if self._fixed is None else self.walls.verts[self._fixed]
             verts = np.ascontiguousarray(verts, dtype=np.float64)
             grid = build_grid(verts, prm.support).arrays()
+            flat = flat_parts(verts)
             table = None
             if self.cfg["faces"] == "table":
                 spacing = self.cfg["table_spacing"] * prm.h
-                table = build_table(verts, grid, prm.kernel_id, prm.h, prm.gravity, spacing,
+                table = build_table(verts, flat, grid, prm.kernel_id, prm.h, prm.gravity, spacing,
                                     self.cfg["table_max_nodes"])
-            self._faces = (verts, grid, stamps_for(verts.shape[0]), table)
-        verts, grid, stamps, table = self._faces
+            self._faces = (verts, flat, grid, stamps_for(verts.shape[0]), table)
+        verts, flat, grid, stamps, table = self._faces
         stats = ctx.stats(self)  # in the summary: which terms the faces got, and the table's size
         stats["face_terms"] = "table" if table is not None else "exact"
         if self.cfg["faces"] == "table":
@@ -306,5 +307,5 @@ class WallIntegralPlugin:
                              terms.hydro, terms.fill, terms.normals)
             return
         self._epoch += 1  # the face marks of this call differ from every earlier one's
-        face_wall_terms(st.pos, verts, *grid, stamps, self._epoch, prm.kernel_id, prm.h, prm.gravity,
+        face_wall_terms(st.pos, verts, flat, *grid, stamps, self._epoch, prm.kernel_id, prm.h, prm.gravity,
                         full, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)

@@ -58,7 +58,7 @@ def table_shape(verts: np.ndarray, h: float, spacing: float):
     return lo, shape
 
 
-def build_table(verts, grid, kernel_id, h, gravity, spacing, max_nodes) -> FaceTable | None:
+def build_table(verts, flat, grid, kernel_id, h, gravity, spacing, max_nodes) -> FaceTable | None:
     """The table of the faces ``verts`` (nf, corners, dim) with their face grid ``grid``
     (``FaceGrid.arrays()``); None when it would need more than ``max_nodes`` nodes."""
     lo, shape = table_shape(verts, h, spacing)
@@ -67,13 +67,13 @@ def build_table(verts, grid, kernel_id, h, gravity, spacing, max_nodes) -> FaceT
         return None
     tab = np.zeros((nodes, NV))
     stamps = np.full((64, verts.shape[0]), -1, np.int64)
-    _fill(lo, spacing, shape, verts.shape[2], verts, *grid, stamps, kernel_id, h, np.asarray(gravity, np.float64),
+    _fill(lo, spacing, shape, verts.shape[2], verts, flat, *grid, stamps, kernel_id, h, np.asarray(gravity, np.float64),
           tab)
     return FaceTable(lo, 1.0 / spacing, shape, tab)
 
 
 @njit(cache=True, parallel=True)
-def _fill(lo, spacing, shape, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, kernel_id, h, gravity, tab):
+def _fill(lo, spacing, shape, dim, verts, flat, glo, ginv, gshape, gstart, gitems, stamps, kernel_id, h, gravity, tab):
     nodes = tab.shape[0]
     rows = stamps.shape[0]
     q0 = np.zeros((dim, dim))  # no other plugin's directions: the faces' own projector is stored
@@ -86,7 +86,7 @@ def _fill(lo, spacing, shape, dim, verts, glo, ginv, gshape, gstart, gitems, sta
             x1 = lo[1] + j * spacing
             x2 = lo[2] + k * spacing if dim == 3 else 0.0
             near, s, gr0, gr1, gr2, t0, t1, t2, basis, count = point_terms(
-                x0, x1, x2, dim, verts, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), m, kernel_id, h,
+                x0, x1, x2, dim, verts, flat, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), m, kernel_id, h,
                 gravity, q0)
             if near == 0:
                 continue

@@ -30,6 +30,10 @@ from numba import njit
 from .faces import EPS, edge3, plane_basis, sector, segment2
 from .share import add_face
 
+#: a foot point closer than this (units of h) to a vertex of its triangle is moved this far
+#: into the triangle (:func:`triangle_terms`)
+VERTEX_FOOT = 1e-9
+
 
 @njit(cache=True)
 def segment_terms(kid, x0, x1, verts, f, h):
@@ -74,6 +78,14 @@ def triangle_terms(kid, x0, x1, x2, verts, f, h):
     w0, w1, w2 = verts[f, 2, 0] - x0, verts[f, 2, 1] - x1, verts[f, 2, 2] - x2
     qc0 = (w0 * e10 + w1 * e11 + w2 * e12) / h
     qc1 = (w0 * e20 + w1 * e21 + w2 * e22) / h
+    if min(qa0 * qa0 + qa1 * qa1, qb0 * qb0 + qb1 * qb1, qc0 * qc0 + qc1 * qc1) < VERTEX_FOOT ** 2:
+        # the foot on a vertex: the edges' angles below take a foot on an edge's line as just
+        # inside it, which at a vertex makes the corner a half-plane. Move the foot into the
+        # triangle (towards its centroid) by VERTEX_FOOT, so that each edge sees it inside.
+        c0, c1 = (qa0 + qb0 + qc0) / 3.0, (qa1 + qb1 + qc1) / 3.0
+        cl = VERTEX_FOOT / math.sqrt(c0 * c0 + c1 * c1)
+        qa0, qa1, qb0, qb1, qc0, qc1 = (qa0 - c0 * cl, qa1 - c1 * cl, qb0 - c0 * cl, qb1 - c1 * cl, qc0 - c0 * cl,
+                                        qc1 - c1 * cl)
     inside = 1.0
     s = 0.0
     w = 0.0

@@ -196,7 +196,7 @@ def plane_group_terms(idx, count, pos, normals, offsets, member, own_normals, ow
 
 
 @njit(cache=True, parallel=True)
-def moving_face_terms(pos, rot, centre, origin, vel, acc, omega, alpha, verts, glo, ginv, gshape, gstart, gitems,
+def moving_face_terms(pos, rot, centre, origin, vel, acc, omega, alpha, verts, flat, glo, ginv, gshape, gstart, gitems,
                       stamps, epoch, kernel_id, h, gravity, world_gravity, full, coef_p, coef_h, share, grad, hydro,
                       fill, q, flux, accel, load):
     """Add a moving group's faces (reference ``verts`` and their grid) to the terms of every
@@ -228,7 +228,7 @@ def moving_face_terms(pos, rot, centre, origin, vel, acc, omega, alpha, verts, g
                             acc_ += rot[u, a] * q[i, u, w] * rot[w, e]
                     qb[a, e] = acc_
             near, s, gr0, gr1, gr2, t0, t1, t2, basis, count = point_terms(
-                X[0], X[1], X[2], dim, verts, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), first + i,
+                X[0], X[1], X[2], dim, verts, flat, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), first + i,
                 kernel_id, h, gravity, qb)
             if near == 0:
                 continue
@@ -241,7 +241,7 @@ def moving_face_terms(pos, rot, centre, origin, vel, acc, omega, alpha, verts, g
             # T (-a_w): the same faces' moment with -a_w (in the group's frame) for gravity
             gb[0], gb[1], gb[2] = _turn_back(rot, dim, -a0, -a1, -a2)
             _, sa, _, _, _, m0, m1, m2, _, _ = point_terms(
-                X[0], X[1], X[2], dim, verts, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), second + i,
+                X[0], X[1], X[2], dim, verts, flat, glo, ginv, gshape, gstart, gitems, stamps, np.int64(b), second + i,
                 kernel_id, h, gb, qb)
             M0, M1, M2 = _turn(rot, dim, m0, m1, m2)
             M0 -= sa * a0

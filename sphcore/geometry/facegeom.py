@@ -31,15 +31,22 @@ def _vert(verts, f, j, c):
     return verts[f, j, c] if c < verts.shape[2] else 0.0
 
 
+#: which part of a face holds its nearest point (:func:`nearest_feature`): the interior, a
+#: vertex (1 + j: vertex j) or, of a triangle, an edge (4: vertices 0-1, 5: 0-2, 6: 1-2)
+INTERIOR, EDGE_01, EDGE_02, EDGE_12 = 0, 4, 5, 6
+
+
 @njit(cache=True)
-def nearest_point(verts, f, x0, x1, x2):
-    """The point (q0, q1, q2) of face f nearest to (x0, x1, x2)."""
+def nearest_feature(verts, f, x0, x1, x2):
+    """(q0, q1, q2, part): the point of face f nearest to (x0, x1, x2) and the part of the
+    face it lies on (:data:`INTERIOR`, 1 + j for vertex j, or an edge code)."""
     if verts.shape[2] == 2:
         p0, p1 = verts[f, 0, 0], verts[f, 0, 1]
         e0, e1 = verts[f, 1, 0] - p0, verts[f, 1, 1] - p1
         t = ((x0 - p0) * e0 + (x1 - p1) * e1) / (e0 * e0 + e1 * e1)
+        part = 1 if t <= 0.0 else (2 if t >= 1.0 else INTERIOR)
         t = min(max(t, 0.0), 1.0)
-        return p0 + t * e0, p1 + t * e1, 0.0
+        return p0 + t * e0, p1 + t * e1, 0.0, part
     a0, a1, a2 = verts[f, 0, 0], verts[f, 0, 1], verts[f, 0, 2]
     b0, b1, b2 = verts[f, 1, 0], verts[f, 1, 1], verts[f, 1, 2]
     c0, c1, c2 = verts[f, 2, 0], verts[f, 2, 1], verts[f, 2, 2]
@@ -49,33 +56,40 @@ def nearest_point(verts, f, x0, x1, x2):
     d1 = ab0 * ap0 + ab1 * ap1 + ab2 * ap2
     d2 = ac0 * ap0 + ac1 * ap1 + ac2 * ap2
     if d1 <= 0.0 and d2 <= 0.0:
-        return a0, a1, a2
+        return a0, a1, a2, 1
     bp0, bp1, bp2 = x0 - b0, x1 - b1, x2 - b2
     d3 = ab0 * bp0 + ab1 * bp1 + ab2 * bp2
     d4 = ac0 * bp0 + ac1 * bp1 + ac2 * bp2
     if d3 >= 0.0 and d4 <= d3:
-        return b0, b1, b2
+        return b0, b1, b2, 2
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
         v = d1 / (d1 - d3)
-        return a0 + v * ab0, a1 + v * ab1, a2 + v * ab2
+        return a0 + v * ab0, a1 + v * ab1, a2 + v * ab2, EDGE_01
     cp0, cp1, cp2 = x0 - c0, x1 - c1, x2 - c2
     d5 = ab0 * cp0 + ab1 * cp1 + ab2 * cp2
     d6 = ac0 * cp0 + ac1 * cp1 + ac2 * cp2
     if d6 >= 0.0 and d5 <= d6:
-        return c0, c1, c2
+        return c0, c1, c2, 3
     vb = d5 * d2 - d1 * d6
     if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
         w = d2 / (d2 - d6)
-        return a0 + w * ac0, a1 + w * ac1, a2 + w * ac2
+        return a0 + w * ac0, a1 + w * ac1, a2 + w * ac2, EDGE_02
     va = d3 * d6 - d5 * d4
     if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
         w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        return b0 + w * (c0 - b0), b1 + w * (c1 - b1), b2 + w * (c2 - b2)
+        return b0 + w * (c0 - b0), b1 + w * (c1 - b1), b2 + w * (c2 - b2), EDGE_12
     den = 1.0 / (va + vb + vc)
     v = vb * den
     w = vc * den
-    return (a0 + ab0 * v + ac0 * w, a1 + ab1 * v + ac1 * w, a2 + ab2 * v + ac2 * w)
+    return a0 + ab0 * v + ac0 * w, a1 + ab1 * v + ac1 * w, a2 + ab2 * v + ac2 * w, INTERIOR
+
+
+@njit(cache=True)
+def nearest_point(verts, f, x0, x1, x2):
+    """The point (q0, q1, q2) of face f nearest to (x0, x1, x2)."""
+    q0, q1, q2, _ = nearest_feature(verts, f, x0, x1, x2)
+    return q0, q1, q2
 
 
 @njit(cache=True)

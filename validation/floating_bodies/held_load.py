@@ -98,7 +98,7 @@ def main(argv=None) -> int:
         (Path(tmp) / "case.toml").write_text(case_text(args.box))
         case, pm = runner.load(Path(tmp))
         sim = build(case, pm)
-        sums, count = {}, 0
+        sums, count, side = {}, 0, np.zeros(dim - 1)
         for step in range(args.steps):
             sim.advance()
             if step < args.first or step % 5:
@@ -118,6 +118,7 @@ def main(argv=None) -> int:
                             ("beside, below the bottom", ~inside & below)):
                 s = sums.setdefault(part, np.zeros(3))
                 s += [load[m, up].sum(), load_p[m, up].sum(), m.sum()]
+            side += load[:, :up].sum(axis=0)
             count += 1
         n, t = sim.state.n, sim.t
     area = float(np.prod(hi[:up] - lo[:up]))
@@ -130,6 +131,7 @@ def main(argv=None) -> int:
     for part, s in sums.items():
         print(f"{part:26s} {s[2] / count:7.0f} {s[0] / count:10.3f} {s[1] / count:10.3f} {(s[0] - s[1]) / count:10.3f}")
     print(f"{'total':26s} {'':7s} {total:10.3f}")
+    print(f"{'across (' + ', '.join('xy'[:up]) + ')':26s} {'':7s} " + " ".join(f"{v / count:10.5f}" for v in side))
     print(f"hydrostatic on the bottom, rho g d A: {bottom:.3f} {unit}; total / it - 1: {100 * (total / bottom - 1):+.1f} %")
     return 0
 
