@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sphcore.api import OutputError, ScheduledWriter, hookimpl, leading_complete, write_atomically
+from sphcore.api import OutputError, ScheduledWriter, hookimpl, leading_complete, rotation_vector, write_atomically
 from sphcore_plugins.netcdf import case_attributes, header_cut, new_dataset, output_error, rewrite_first, series_on_disk
 
 TABLE = "wall_loads"
@@ -205,8 +205,6 @@ def read_loads(path: Path):
 def kinematics(ctx, groups) -> dict:
     """Each group's motion now: {variable: (groups, 3)} (2D: the third component of the
     position and velocity 0, rotations about z)."""
-    from sphcore.physics.rigid import rotation_vector
-
     moving = {g.name: g for g in getattr(ctx.case, "moving", ())}
     out = {name: np.zeros((len(groups), 3)) for name in KINEMATICS}
     for k, name in enumerate(groups):

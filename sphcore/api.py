@@ -16,7 +16,8 @@
   :func:`box_cells`,
   :func:`face_distance`, :func:`first_contact` (swept sphere), :func:`cell_span`;
   :func:`outline` (the faces of the region planes enclose, for drawing); walls that move:
-  :class:`MovingGroup` (``ctx.case.moving``), its :class:`Motion` and :class:`Pose`;
+  :class:`MovingGroup` (``ctx.case.moving``), its :class:`Motion` and :class:`Pose`, and
+  :func:`rotation_vector` (a rotation matrix's axis times angle);
 - neighbours and kernels for numba kernels: :class:`CellGrid` (its ``.view`` is a
   :class:`Grid`), :func:`cell_of`, :func:`cell_range` (the one neighbour walk),
   :func:`kernel_w`, :func:`kernel_f`, :data:`SUPPORT`, the kernel ids;
@@ -41,6 +42,7 @@ from sphcore.geometry.facegeom import face_distance, first_contact, nearest_feat
 from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
 from sphcore.geometry.faces import Faces
 from sphcore.geometry.motion import Motion, MovingGroup, Pose, plane_groups, planes_at
+from sphcore.physics.rigid import rotation_vector
 from sphcore.geometry.planes import Planes, normal_parts, outline, particle_distance, plane_distance
 from sphcore.io.atomic import mark_written, write_atomically
 from sphcore.io.schedule import Schedule, schedule_options
@@ -60,6 +62,7 @@ __all__ = [
     "hookimpl", "Option", "CaseError", "Instability", "OutputError",
     "RunContext", "Params", "ParticleState", "Sources", "Fields", "WallTerms", "FLUID", "SPHERE", "GHOST",
     "Planes", "plane_distance", "particle_distance", "normal_parts", "outline", "Motion", "MovingGroup", "Pose", "plane_groups", "planes_at", "tank_load",
+    "rotation_vector",
     "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "nearest_feature", "face_distance",
     "first_contact",
     "CellGrid", "Grid", "cell_of", "cell_range", "kernel_w", "kernel_f", "SUPPORT",

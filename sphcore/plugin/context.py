@@ -40,6 +40,17 @@ Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
 ``ctx.planes_at(t)``  the case's wall planes at time t (s): a moving tank's where it is then.
 ``ctx.add_wall_load`` (group, impulse, angular_impulse): what the fluid gave the walls
                       of a moving group this step (N s, N m s), for ``wall_loads``.
+``ctx.set_wall_force`` (group, force, moment): the fluid's force and moment on a moving
+                      group at the rates just evaluated, set by the plugins whose walls
+                      carry a pressure; a floating body takes it for its kicks.
+``ctx.wall_forces``   {group: (force, moment)} as set above, for the last evaluation.
+``ctx.add_contact_impulse`` (group, impulse, angular_impulse): a wall contact's impulse
+                      on a group this step (N s, N m s): in its load, and given to a
+                      floating body at once.
+``ctx.contact_impulses`` {group: six numbers}: the contact impulses of the current step.
+``ctx.wall_members``  {group: (particle indices, weights)}: the particles a floating
+                      body's faces completed at the last evaluation and the body's share
+                      of each one's wall terms.
 ====================  ===================================================================
 
 The context is a view of the run state (:class:`sphcore.run.state.RunState`, ``ctx.run``),
