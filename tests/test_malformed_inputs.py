@@ -370,14 +370,18 @@ def test_an_empty_or_cut_checkpoint_is_refused_on_restart(tmp_path, capsys):
 
 
 def test_a_reader_that_leaves_early_stops_sph_quietly():
-    """`sph options | head -1`: a closed pipe ends sph with 128 + SIGPIPE and no traceback."""
+    """`sph options | head -1`: a closed pipe ends sph with 128 + SIGPIPE and no traceback.
+    The reader has left before sph starts (its whole output, 13 KB, would fit in the pipe's
+    buffer: a reader that read a little first could leave after sph had written it all)."""
+    import os
     import subprocess
     import sys
 
-    proc = subprocess.Popen([sys.executable, "-m", "sphcore.cli", "options"], stdout=subprocess.PIPE,
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    proc = subprocess.Popen([sys.executable, "-m", "sphcore.cli", "options"], stdout=write_end,
                             stderr=subprocess.PIPE)
-    proc.stdout.read(10)
-    proc.stdout.close()
+    os.close(write_end)
     err = proc.stderr.read().decode()
     assert proc.wait() == 128 + signal.SIGPIPE and "Traceback" not in err, err
 
