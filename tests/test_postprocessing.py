@@ -87,10 +87,11 @@ def png(path):
 
 def test_the_toolkit_is_these_scripts():
     """A script added to postprocessing/ joins the tests below; runs.py is their shared reader,
-    wave_theory.py the wave maker's linear theory and heave_theory.py a floating box's
-    (modules that read no run; heave_theory's own tests check its command)."""
+    wave_theory.py the wave maker's linear theory, heave_theory.py a floating box's and
+    sloshing_theory.py a tank's modes and a free decay's measures (modules that read no run;
+    heave_theory's own tests check its command)."""
     assert sorted(p.name for p in SCRIPTS.glob("*.py")) == sorted(TOOLKIT + ["runs.py", "wave_theory.py",
-                                                                              "heave_theory.py"])
+                                                                              "heave_theory.py", "sloshing_theory.py"])
 
 
 @pytest.mark.parametrize("name", TOOLKIT)

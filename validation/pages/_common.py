@@ -137,9 +137,12 @@ def load(path: Path, name: str):
 
 def toolkit(script: str):
     """``postprocessing/<script>.py`` as a module, for its definitions (the same figures the
-    script prints). The toolkit's scripts import their sibling ``runs`` by name, as Python
-    finds it when a script runs from its folder: it is loaded first under that name."""
+    script prints). The toolkit's scripts import their siblings ``runs`` and the theory
+    modules (``*_theory.py``, which read no run) by name, as Python finds them when a script
+    runs from its folder: they are loaded first under those names."""
     runs = load(POSTPROCESSING / "runs.py", "runs")
+    for theory in sorted(POSTPROCESSING.glob("*_theory.py")):
+        load(theory, theory.stem)
     return runs if script == "runs" else load(POSTPROCESSING / f"{script}.py", f"postprocessing_{script}")
 
 
