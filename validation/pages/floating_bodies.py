@@ -4,7 +4,8 @@ against linear potential flow, at two resolutions.
 Runs ``cases/heave_decay`` (a box 0.2 m x 0.1 m of density 500 in a 3 m tank with 0.3 m of
 water, released 5 mm above its draft; dx = 0.005 m, and dx = 0.01 m with ``--set``),
 ``cases/floating_box`` (the same box in a 1 m tank, dx = 0.01 m) to t = 10 s, about eleven
-heave periods, and ``cases/heeled_box`` (a square heeled 5 deg: density 150, GM > 0, and
+heave periods, ``cases/floating_box_3d`` (a box 0.6 m x 0.6 m x 0.4 m of density 500, free in
+every degree of freedom, dx = 0.025 m) to t = 12.3 s, ten heave periods, and ``cases/heeled_box`` (a square heeled 5 deg: density 150, GM > 0, and
 density 500, GM < 0, drawn at its own draft). The figures are ``postprocessing/body_motion.py``'s (extrema of the box's
 height) against the equilibrium Archimedes gives the discrete water volume, and against
 ``postprocessing/heave_theory.py``'s free decay (the radiation coefficients of the
@@ -26,7 +27,7 @@ DRAFT = DENSITY / RHO * HEIGHT  # Archimedes: half the height at density 500
 DEPTH = 0.3  # m of water in both tanks
 RELEASE = 0.5  # s: both cases hold the box until then
 LONG_WAVE_RETURN = 1.6  # s after the release: the release's long waves back from the walls of the 3 m tank
-ARCHIMEDES_T_END = 10.0
+ARCHIMEDES_T_END = 10.0  # s: cases/floating_box, about eleven heave periods
 HEEL = 5.0  # deg: cases/heeled_box is drawn heeled by this much (orientation)
 CAPSIZE = ["bodies[0].density=500", "domain.walls[0].min=[0.65, 0.2]", "domain.walls[0].max=[0.85, 0.4]"]
 WINDOW = 2.0  # s: the Archimedes run's means are taken over windows this long
@@ -42,10 +43,12 @@ def plan(runs: Path) -> list[dict]:
          "t_end": None, "out": runs / "heeled_box_500"},
         {"group": "decay", "label": "dx = 0.01 m", "case": "heave_decay", "sets": ["particles.dx=0.01"],
          "t_end": None, "out": runs / "heave_decay_dx0.01"},
-        {"group": "archimedes", "label": "dx = 0.01 m (shipped)", "case": "floating_box", "sets": [],
+        {"group": "archimedes", "label": "2D box, dx = 0.01 m (shipped)", "case": "floating_box", "sets": [],
          "t_end": ARCHIMEDES_T_END, "out": runs / "floating_box_10s"},
         {"group": "decay", "label": "dx = 0.005 m (shipped)", "case": "heave_decay", "sets": [], "t_end": None,
          "out": runs / "heave_decay_dx0.005"},
+        {"group": "archimedes", "label": "3D box, dx = 0.025 m (shipped)", "case": "floating_box_3d", "sets": [],
+         "t_end": None, "out": runs / "floating_box_3d"},
     ]
 
 
@@ -84,20 +87,25 @@ def roll_figures(spec: dict, s: dict) -> dict | None:
 
 
 def equilibrium(s: dict) -> float:
-    """The box's centre height at rest by Archimedes with the run's own water: the level
-    eta that the particles' volume n dx^2 and the box's draft give the tank,
-    L eta = n dx^2 + B d, less the draft, plus half the height."""
+    """The body's centre height at rest by Archimedes with the run's own water: the level
+    eta that the particles' volume n dx^dim and the body's displaced volume give the tank,
+    A eta = n dx^dim + A_wp T (A the tank's plan area, A_wp the box's, T its draft), less
+    the draft, plus half the box's height. Gravity is along the last axis."""
     cfg = s["config"]
+    dim = len(cfg["domain"]["min"])
+    assert np.flatnonzero(cfg["physics"]["gravity"][:dim]).tolist() == [dim - 1], "gravity along the last axis"
     dx = float(cfg["particles"]["dx"])
-    length = float(cfg["domain"]["max"][0]) - float(cfg["domain"]["min"][0])
-    level = (s["n_particles"] * dx * dx + BEAM * DRAFT) / length
-    return level - DRAFT + 0.5 * HEIGHT
+    tank = np.subtract(cfg["domain"]["max"], cfg["domain"]["min"])
+    box = np.subtract(cfg["domain"]["walls"][0]["max"], cfg["domain"]["walls"][0]["min"])
+    height, draft = float(box[-1]), float(cfg["bodies"][0]["density"]) / RHO * float(box[-1])
+    level = (s["n_particles"] * dx ** dim + np.prod(box[:-1]) * draft) / np.prod(tank[:-1])
+    return float(level - draft + 0.5 * height)
 
 
-def _series(out: Path):
+def _series(out: Path, up: str = "y"):
     bm = toolkit("body_motion")
     cols = bm.read(out)
-    return cols["t"], cols["bodies[0].y"], bm
+    return cols["t"], cols[f"bodies[0].{up}"], bm
 
 
 def decay_figures(spec: dict, s: dict) -> dict | None:
@@ -120,17 +128,28 @@ def decay_figures(spec: dict, s: dict) -> dict | None:
 
 
 def archimedes_figures(s: dict, out: Path) -> dict | None:
-    """Means of the box's height over windows of WINDOW s after the release, against the
-    Archimedes equilibrium; their slope (the drift)."""
+    """Means of the body's height over windows of WINDOW s after the release (the first
+    window left out), against the Archimedes equilibrium; their slope (the drift); the
+    largest horizontal displacement of its centre and the largest rotation after the
+    release."""
     if s["status"] != "completed":
         return None
-    t, y, _ = _series(out)
+    dim = len(s["config"]["domain"]["min"])
+    up = "yz"[dim - 2]
+    t, y, bm = _series(out, up)
+    cols = bm.read(out)
+    release = float(s["config"]["bodies"][0].get("release", 0.0))
     eq = equilibrium(s)
-    starts = np.arange(RELEASE + WINDOW, float(t[-1]) - WINDOW + 1e-9, WINDOW)
+    starts = np.arange(release + WINDOW, float(t[-1]) - WINDOW + 1e-9, WINDOW)
     means = [float(np.mean(y[(t >= a) & (t < a + WINDOW)]) - eq) for a in starts]
     slope = float(np.polyfit(starts + 0.5 * WINDOW, means, 1)[0]) if len(means) > 1 else float("nan")
+    after = t >= release
+    across = np.stack([cols[f"bodies[0].{a}"] for a in "xy"[:dim - 1]], axis=1)
+    shift = float(np.max(np.linalg.norm(across[after] - across[after][0], axis=1)))
+    turns = np.stack([cols[f"bodies[0].r{a}"] for a in ("xyz" if dim == 3 else "z")], axis=1)
+    turn = float(np.max(np.linalg.norm(turns[after] - turns[after][0], axis=1)))
     return {"starts": starts, "means": means, "slope": slope, "dx": float(s["config"]["particles"]["dx"]),
-            "t": t, "y": y - eq}
+            "t": t, "y": y - eq, "up": up, "shift": shift, "turn": turn, "dim": dim}
 
 
 def theory(t_end: float) -> dict:
@@ -163,16 +182,18 @@ def _plot(decays: dict, pf: dict, figures: Path) -> None:
     save(fig, figures, f"{NAME}_heave_decay.png")
 
 
-def _plot_archimedes(m: dict, figures: Path) -> None:
+def _plot_archimedes(arch: list, figures: Path) -> None:
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7, 2.8))
-    ax.plot(m["t"], 1e3 * m["y"], "-", lw=0.8, label="box centre - Archimedes equilibrium")
-    ax.plot(m["starts"] + 0.5 * WINDOW, 1e3 * np.asarray(m["means"]), "ks", ms=4, label=f"{WINDOW:g} s means")
-    for s in (-0.5, 0.5):
-        ax.axhline(1e3 * s * m["dx"], color="0.6", ls="--", lw=0.7)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("mm")
-    ax.legend(fontsize=8)
+    shown = [(label, m) for label, _, m in arch if m is not None]
+    fig, axes = plt.subplots(len(shown), 1, figsize=(7, 2.6 * len(shown)), squeeze=False)
+    for ax, (label, m) in zip(axes[:, 0], shown):
+        ax.plot(m["t"], 1e3 * m["y"], "-", lw=0.8, label=f"{label}: centre - Archimedes equilibrium")
+        ax.plot(m["starts"] + 0.5 * WINDOW, 1e3 * np.asarray(m["means"]), "ks", ms=4, label=f"{WINDOW:g} s means")
+        for s in (-0.5, 0.5):
+            ax.axhline(1e3 * s * m["dx"], color="0.6", ls="--", lw=0.7)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel(f"{m['up']} [mm]")
+        ax.legend(fontsize=8)
     fig.tight_layout()
     save(fig, figures, f"{NAME}_archimedes.png")
 
@@ -193,7 +214,7 @@ def _plot_rolls(rolls: dict, figures: Path) -> None:
 
 
 def build(runs: Path, figures: Path, rerun: bool) -> str:
-    decays, summaries, arch, rolls = {}, {}, None, {}
+    decays, summaries, arch, rolls = {}, {}, [], {}
     for spec in plan(runs):
         s = run_case(spec["case"], spec["out"], spec["sets"], t_end=spec["t_end"], rerun=rerun)
         summaries[spec["label"]] = s
@@ -202,7 +223,7 @@ def build(runs: Path, figures: Path, rerun: bool) -> str:
         elif spec["group"] == "roll":
             rolls[spec["label"]] = (spec, s, roll_figures(spec, s))
         else:
-            arch = (spec["label"], s, archimedes_figures(s, spec["out"]))
+            arch.append((spec["label"], s, archimedes_figures(s, spec["out"])))
     pf = theory(2.5)
     _plot(decays, pf, figures)
     nat = pf["natural"]
@@ -223,19 +244,23 @@ def build(runs: Path, figures: Path, rerun: bool) -> str:
           table(["run", "particles over the draft", "mean offset from Archimedes, last 0.8 s of the window [mm]",
                  "period [s]", "log decrement, first cycle", "1st extremum: t [s] / x", "2nd", "3rd",
                  "particles", "wall time [s]"], rows)]
-    if arch is not None:
-        label, s, m = arch
-        if m is None:
-            md.append(f"\n### Archimedes, `floating_box` to {ARCHIMEDES_T_END:g} s: {status(s)}\n")
-        else:
-            _plot_archimedes(m, figures)
-            md += [(f"\n### Archimedes, `floating_box` to {ARCHIMEDES_T_END:g} s ({label}; {WINDOW:g} s means "
-                    "of the box's height less the Archimedes equilibrium)\n"),
-                   table(["window [s]", "mean [mm]", "mean / dx"],
-                         [[f"{a:.1f}-{a + WINDOW:.1f}", f"{1e3 * v:+.2f}", f"{v / m['dx']:+.3f}"]
-                          for a, v in zip(m["starts"], m["means"])]),
-                   (f"\nDrift of the means: {1e3 * m['slope']:+.3f} mm/s; {s['steps']} steps, "
-                    f"{s['wall_time_s']:.0f} s wall time.\n")]
+    if arch:
+        _plot_archimedes(arch, figures)
+        md.append(f"\n### Archimedes ({WINDOW:g} s means of the body's height less the Archimedes equilibrium, "
+                  "after the release)\n")
+        rows = []
+        for label, s, m in arch:
+            if m is None:
+                rows.append([label, status(s)] + ["-"] * 6)
+                continue
+            span = f"{m['starts'][0]:.1f}-{m['starts'][-1] + WINDOW:.1f}"
+            rows.append([label, span, ", ".join(f"{1e3 * v:+.2f}" for v in m["means"]),
+                         f"{max(map(abs, m['means'])) / m['dx']:.3f}",
+                         f"{1e3 * m['slope']:+.3f}", f"{1e3 * m['shift']:.3f}", f"{np.degrees(m['turn']):.4f}",
+                         f"{s['n_particles']:,}, {s['steps']} steps, {s['wall_time_s']:.0f} s"])
+        md.append(table(["run", "from-to [s]", "means [mm]", "largest mean / dx (absolute)", "drift of the means [mm/s]",
+                         "largest horizontal shift [mm]", "largest rotation [deg]", "particles, steps, wall time"],
+                        rows))
     if rolls:
         _plot_rolls(rolls, figures)
         rows = []
