@@ -42,7 +42,6 @@ from sphcore.geometry.facegeom import face_distance, first_contact, nearest_feat
 from sphcore.geometry.facegrid import FaceGrid, box_cells, build_grid, cell_span
 from sphcore.geometry.faces import Faces
 from sphcore.geometry.motion import Motion, MovingGroup, Pose, plane_groups, planes_at
-from sphcore.physics.rigid import rotation_vector
 from sphcore.geometry.planes import Planes, normal_parts, outline, particle_distance, plane_distance
 from sphcore.io.atomic import mark_written, write_atomically
 from sphcore.io.schedule import Schedule, schedule_options
@@ -55,6 +54,7 @@ from sphcore.physics.equations import WallTerms
 from sphcore.physics.kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
 from sphcore.physics.params import Params
 from sphcore.physics.particles import FLUID, GHOST, SPHERE, Fields, ParticleState, Sources
+from sphcore.physics.rigid import rotation_vector
 from sphcore.plugin.context import RunContext
 from sphcore.plugin.hookspecs import hookimpl
 

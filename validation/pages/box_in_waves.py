@@ -13,13 +13,14 @@ sense its roll counts: a correlation near -1 would say the other). The measured 
 start at about 0 at 6.3 s, when the group reaches the box, from a rest position the data
 do not give; each computed motion is therefore shifted to equal the record's first value
 at the record's first time (the box has by then drifted with the group's first waves and
-settled at its own draft; the offset of that draft is reported separately). For each series: the measured and computed ranges (max - min over the window), the
-root-mean-square of their difference over the window divided by the measured
-root-mean-square, and the lag of the computed series behind the measured one that
-maximises their correlation (searched within +-0.3 s). The gauges are also given by linear
-theory from the flap's record (``postprocessing/wave_theory.py``: the flap's transfer
-function and the dispersion of each Fourier component), which checks the record, its sense
-and the gauges' places independently of the runs.
+settled at its own draft; the offset of that draft is reported separately). For each
+series: the measured and computed ranges (max - min over the window), the root-mean-square
+of their difference over the window divided by the measured root-mean-square, and the lag
+of the computed series behind the measured one that maximises their correlation (searched
+within +-0.3 s). The gauges are also given by linear theory from the flap's record
+(``postprocessing/wave_theory.py``: the flap's transfer function and the dispersion of
+each Fourier component), which checks the record, its sense and the gauges' places
+independently of the runs.
 """
 
 from __future__ import annotations
@@ -74,40 +75,39 @@ def linear_theory() -> dict:
     return {name: (t, theory.recorded_elevation(t, stroke, DEPTH, x, theory.flap)) for name, x in GAUGES.items()}
 
 
-def computed(out: Path, release: float) -> dict:
-    """The run's gauges and the box's motion as time series (SI units; roll in degrees)."""
+def _body(out: Path):
+    """The box's times, centre positions (n, 3) and rotation about z (rad) from the run's
+    loads file."""
+    import xarray as xr
+
+    with xr.open_dataset(out / "wall_loads.nc") as w:
+        b = [g.strip() for g in w.attrs["wall_groups"].split(";")].index("bodies[0]")
+        return w["time"].values, w["position"].values[:, b, :], w["rotation"].values[:, b, 2]
+
+
+def computed(out: Path) -> dict:
+    """The run's gauges and the box's motion as time series (SI units; roll in degrees),
+    the motions shifted to the record's first value at the record's first time."""
     import xarray as xr
 
     with xr.open_dataset(out / "probes.nc") as p:
         names = [n.decode() if isinstance(n, bytes) else str(n) for n in p["probe_name"].values]
         tp = p["time"].values
         depth = p["depth"].values
-    with xr.open_dataset(out / "wall_loads.nc") as w:
-        groups = [g.strip() for g in w.attrs["wall_groups"].split(";")]
-        b = groups.index("bodies[0]")
-        tb = w["time"].values
-        pos = w["position"].values[:, b, :]
-        angle = w["rotation"].values[:, b, 2]
-    k = int(np.searchsorted(tb, release))
+    tb, pos, angle = _body(out)
     series = {n: (tp, depth[:, i] - DEPTH) for i, n in enumerate(names)}
-    series["heave"] = (tb, pos[:, 1] - pos[k, 1])
-    series["sway"] = (tb, pos[:, 0] - pos[k, 0])
-    series["roll"] = (tb, np.degrees(angle - angle[k]))
-    for name in ("heave", "sway", "roll"):  # at the record's start, the record's first value
-        t, y = series[name]
+    motions = {"heave": pos[:, 1], "sway": pos[:, 0], "roll": np.degrees(angle)}
+    for name, y in motions.items():
         te, ye = measured(name)
-        series[name] = (t, y - np.interp(te[0], t, y) + ye[0])
+        series[name] = (tb, y - np.interp(te[0], tb, y) + ye[0])
     return series
 
 
 def draft_offset(out: Path, release: float) -> tuple[float, float]:
     """The box's mean height less where it was drawn (at its Archimedes draft) and the
     spread of it, from the release to the waves' arrival (mm)."""
-    import xarray as xr
-
-    with xr.open_dataset(out / "wall_loads.nc") as w:
-        b = [g.strip() for g in w.attrs["wall_groups"].split(";")].index("bodies[0]")
-        t, y = w["time"].values, w["position"].values[:, b, 1]
+    t, pos, _ = _body(out)
+    y = pos[:, 1]
     keep = (t >= release + RELEASE_PAD) & (t <= CALM_END)
     return 1e3 * float(np.mean(y[keep]) - y[0]), 1e3 * float(np.std(y[keep]))
 
@@ -173,12 +173,13 @@ def build(runs: Path, figures: Path, rerun: bool) -> str:
                       f"{s['wall_time_s']:.0f}", f"{s['particle_steps_per_s']:.3g}"])
         if s["status"] != "completed":
             continue
-        series = computed(spec["out"], release)
+        series = computed(spec["out"])
         results[spec["label"]] = series
         rows += [_row(spec["label"], name, series[name]) for name in SERIES]
     _plot(results, theory, figures)
-    md = [table(["run", "status", "particles", f"box height less its drawn draft, {RELEASE_PAD:g} s after the release "
-                 f"to {CALM_END:g} s: mean (spread) [mm]", "wall time [s]", "particle-steps/s"], costs),
+    offset_head = (f"box height less its drawn draft, {RELEASE_PAD:g} s after the release to {CALM_END:g} s: "
+                   "mean (spread) [mm]")
+    md = [table(["run", "status", "particles", offset_head, "wall time [s]", "particle-steps/s"], costs),
           "\n",
           table(["run", "series", "window [s]", "measured range", "computed range", "ratio",
                  "RMS difference / measured RMS", "lag of the best fit [s]", "correlation at that lag"], rows)]

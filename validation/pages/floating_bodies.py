@@ -102,10 +102,10 @@ def equilibrium(s: dict) -> float:
     return float(level - draft + 0.5 * height)
 
 
-def _series(out: Path, up: str = "y"):
+def _series(out: Path):
     bm = toolkit("body_motion")
     cols = bm.read(out)
-    return cols["t"], cols[f"bodies[0].{up}"], bm
+    return cols["t"], cols["bodies[0].y"], bm
 
 
 def decay_figures(spec: dict, s: dict) -> dict | None:
@@ -136,8 +136,8 @@ def archimedes_figures(s: dict, out: Path) -> dict | None:
         return None
     dim = len(s["config"]["domain"]["min"])
     up = "yz"[dim - 2]
-    t, y, bm = _series(out, up)
-    cols = bm.read(out)
+    cols = toolkit("body_motion").read(out)
+    t, y = cols["t"], cols[f"bodies[0].{up}"]
     release = float(s["config"]["bodies"][0].get("release", 0.0))
     eq = equilibrium(s)
     starts = np.arange(release + WINDOW, float(t[-1]) - WINDOW + 1e-9, WINDOW)
