@@ -221,7 +221,7 @@ def test_a_block_with_clip_leaves_out_the_particles_beyond_a_sloping_plane(tmp_p
         assert np.all(case.planes.distances(sim.state.pos) >= sim.state.radius[:, None] * (1 - 1e-9))
 
 
-def test_a_clipped_block_wholly_beyond_a_plane_is_refused_naming_its_clip(tmp_path):
+def test_a_clipped_block_wholly_beyond_a_plane_is_refused_naming_its_clip(tmp_path, capsys):
     from sphcore.testing import tiny_case
 
     raw = case_with(tiny_case(), {"domain.planes": [{"normal": [0.0, 1.0], "point": [0.0, 0.5]}],
@@ -231,3 +231,4 @@ def test_a_clipped_block_wholly_beyond_a_plane_is_refused_naming_its_clip(tmp_pa
     assert err.value.key == "blocks[0].clip" and "beyond a wall plane" in err.value.expected
     case_dir = tmp_path / "c"
     assert cli.main(["check", str(case_dir)]) == 2 and not (case_dir / "output").exists()
+    assert "blocks[0].clip" in capsys.readouterr().err
