@@ -86,7 +86,20 @@ CORE: dict[str, dict[str, O]] = {
                          "stratification (Fourtakas et al. 2019), so that water at rest is not disturbed"),
     },
     "integrator": {
-        "scheme": O("leapfrog", "str", doc="time integration", choices=("leapfrog", "euler")),
+        "scheme": O("leapfrog", "str", doc="time integration of the weakly compressible scheme",
+                    choices=("leapfrog", "euler")),
+    },
+    "scheme": {
+        "name": O("wcsph", "str", doc="wcsph: weakly compressible (pressure from the density, step from an artificial "
+                  "sound speed); dfsph: divergence-free incompressible (pressure from two solves a step, step from the "
+                  "flow's velocity; docs/explanation/incompressible_scheme.md)", choices=("wcsph", "dfsph")),
+        "cfl": O(0.3, "float", positive=True, doc="dfsph: dt <= cfl * h / |v|max (the flow's Courant number)"),
+        "density_tolerance": O(1e-4, "float", positive=True,
+                               doc="dfsph: the density solve stops when the mean |rho* - rho0| / rho0 is below this"),
+        "divergence_tolerance": O(1e-3, "float", positive=True,
+                                  doc="dfsph: the divergence solve stops when the mean dt |D rho / Dt| / rho0 is below this"),
+        "max_iterations": O(100, "int", positive=True,
+                            doc="dfsph: a solve that has not converged after this many iterations stops the run"),
     },
     "time": {
         "t_end": O(1.0, "float", "s", "simulated time", positive=True),

@@ -246,6 +246,8 @@ def validate(raw: dict, file: Path, plugin_schemas: dict | None = None) -> Case:
         raise CaseError(file, "physics.gravity", f"expected at least {dim} components")
     if cfg["checks"]["rho_min"] >= cfg["checks"]["rho_max"]:
         raise CaseError(file, "checks.rho_max", "expected a value above checks.rho_min")
+    if cfg["scheme"]["name"] == "dfsph":
+        _check_incompressible(file, cfg)
     faces, ranges = parse_walls(file, cfg["domain"]["walls"], dim, Path(file).parent)
     tank = any(sign < 0 for _, _, sign in faces.groups)
     planes = _planes(file, cfg, dim, bounded_by_walls=tank)
@@ -306,3 +308,17 @@ def _moving_groups(file, cfg, dim, ranges, faces, planes) -> tuple[MovingGroup, 
 def case_file(case_dir) -> Path:
     p = Path(case_dir)
     return p / CASE_FILE if p.is_dir() else p
+
+
+def _check_incompressible(file, cfg) -> None:
+    """The keys the divergence-free scheme cannot honour are refused, not ignored: its
+    pressure is the solves', never a function of the density."""
+    if not cfg["physics"]["sph"]:
+        raise CaseError(file, "scheme.name", "dfsph solves for the SPH pressure; physics.sph is false")
+    if cfg["physics"]["modified_pressure"]:
+        raise CaseError(file, "physics.modified_pressure", "dfsph solves for the full pressure: expected false "
+                        "with scheme.name = \"dfsph\"")
+    if cfg["corrections"]["shepard_every"]:
+        raise CaseError(file, "corrections.shepard_every", "dfsph sums its density every step: expected 0 with "
+                        "scheme.name = \"dfsph\"")
+

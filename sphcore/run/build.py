@@ -57,7 +57,10 @@ def _build(case, pm, output_dir, restarting, relaxing, settle) -> Simulation:
         surface = float(tops.max())  # hydrostatic reference of the modified pressure (m)
     prm = derive(case, particles, surface)
     if tops is not None and cfg["physics"]["hydrostatic_init"] and not prm.modified_pressure:
-        _hydrostatic_start(case, prm, particles, tops)
+        if cfg["scheme"]["name"] == "dfsph":
+            _incompressible_start(prm, particles, tops)
+        else:
+            _hydrostatic_start(case, prm, particles, tops)
     run = RunState(particles, cfg["time"]["t_end"])
     if restarting:  # constants above come from the case's initial particles, as in the first run
         try:
@@ -193,3 +196,13 @@ def _hydrostatic_start(case, prm, st, tops):
     rho = eos.density_of(p, prm.rho0, prm.c0, prm.gamma)
     st.rho[fluid] = rho
     st.m[fluid] *= rho / prm.rho0
+
+
+def _incompressible_start(prm, st, tops):
+    """Each fluid block at rest under the divergence-free scheme: density rho0 and masses
+    rho0 dx^dim (the fluid does not compress), the pressure rho0 g d below the block's top,
+    which the first step's density solve starts from."""
+    fluid = st.kind == FLUID
+    st.p[fluid] = prm.rho0 * prm.g_abs * (tops[fluid] - st.pos[fluid] @ prm.up)
+    st.rho[fluid] = prm.rho0
+

@@ -17,6 +17,7 @@ import numpy as np
 from sphcore.errors import CaseError, Instability
 from sphcore.physics import checks
 from sphcore.physics.forces import Forces, PressureField
+from sphcore.physics.incompressible import DivergenceFree, SolvedPressure
 from sphcore.physics.integrators import SCHEMES
 from sphcore.geometry.motion import wall_speed
 from sphcore.physics.timestep import adaptive_dt, max_norms
@@ -42,15 +43,22 @@ class Simulation:
         self.case, self.pm = case, pm
         self.relaxing = relaxing  # the relaxation's own run (sphcore.run.relax): no sph_after_step
         self.run = run
-        self.pressure = PressureField(params)
+        self.incompressible = case.config["scheme"]["name"] == "dfsph"
+        self.pressure = (SolvedPressure if self.incompressible else PressureField)(params)
         self.ctx = ctx = RunContext(case, params, run, pressure=self.pressure, output_dir=output_dir,
                                     restarting=restarting,
                                     plugin_name=lambda plugin: pm.get_name(plugin) or type(plugin).__name__)
         self.hooks = HookRelay(pm)  # the per-step hooks (no pluggy call where none is implemented)
         self.forces = Forces(ctx, self.hooks, self.pressure)
         run.attach_pairs(self.forces.pairs)  # a restart's lists are rebuilt from its anchor
-        self.integrator = SCHEMES[case.config["integrator"]["scheme"]](run, self.forces.evaluate,
-                                                                      evolves_density=params.sph)
+        if self.incompressible:
+            if "sph_extra_sources" in self.hooks.implemented:
+                raise CaseError(case.file, "plugins.use", "dfsph takes the walls' pressure from wall_integral into its "
+                                "solves; plugin source particles (ghost) are not part of them")
+            self.integrator = DivergenceFree(run, self.forces, ctx, case.config["scheme"])
+        else:
+            self.integrator = SCHEMES[case.config["integrator"]["scheme"]](run, self.forces.evaluate,
+                                                                          evolves_density=params.sph)
         # floating bodies: wall groups whose motion the fluid's loads advance (not while relaxing:
         # the relaxation settles the fluid around the bodies where case.toml draws them); a
         # restart puts them where the checkpoint has them before any plugin looks at the walls
@@ -82,7 +90,7 @@ class Simulation:
         if params.sph:
             self.before_step.append(Activity("reorder", StepInterval(cfg["neighbours"]["sort_every"]),
                                              Simulation.reorder))
-            if cfg["corrections"]["shepard_every"]:
+            if cfg["corrections"]["shepard_every"] and not self.incompressible:
                 self.before_step.append(Activity("density_filter",
                                                  StepInterval(cfg["corrections"]["shepard_every"], skip_first=True),
                                                  Simulation.shepard_filter))
@@ -163,8 +171,9 @@ class Simulation:
             vmax, amax = max_norms(self.state.vel, self.integrator.acc)
             if self.case.moving:  # a wall's speed limits the step as a particle's does
                 vmax = max(vmax, wall_speed(self.case.moving, self.t, self.state.pos))
-            dt = adaptive_dt(prm.h, prm.c0, prm.nu, vmax, amax, tcfg["cfl"], tcfg["force_factor"],
-                             tcfg["viscous_factor"])
+            # the incompressible scheme's step follows the flow: no sound speed, its own CFL number
+            c0, cfl = (0.0, self.case.config["scheme"]["cfl"]) if self.incompressible else (prm.c0, tcfg["cfl"])
+            dt = adaptive_dt(prm.h, c0, prm.nu, vmax, amax, cfl, tcfg["force_factor"], tcfg["viscous_factor"])
             if tcfg["dt_max"] is not None:
                 dt = min(dt, tcfg["dt_max"])
         bounds = [b for b in self.hooks.sph_max_dt(ctx=self.ctx) if b is not None]
@@ -257,8 +266,9 @@ class Simulation:
         """Kinetic + potential + Tait internal energy (J; J/m in 2D); see checks.total_energy,
         plus what plugins that store energy report (``sph_energy``)."""
         st, prm = self.state, self.params
+        # the incompressible fluid stores no internal energy: its pressure is a constraint's
         e = checks.total_energy(st.pos, st.vel, st.rho, st.m, prm.gravity, prm.rho0, prm.c0 or 1.0,
-                                prm.gamma, prm.sph)
+                                prm.gamma, prm.sph and not self.incompressible)
         return e + sum(x for x in self.hooks.sph_energy(ctx=self.ctx) if x is not None)
 
     def _energy_reference(self):
@@ -275,7 +285,9 @@ class Simulation:
     def check(self):
         st, ck, prm, core = self.state, self.case.config["checks"], self.params, self.ctx.stats(CORE)
         walls = self.ctx.planes
-        code, i, value = checks.scan(st.pos, st.vel, st.rho, ck["rho_min"] * prm.rho0, ck["rho_max"] * prm.rho0,
+        # a summed density is low wherever the support is not full (a splash): only its upper bound applies
+        rho_lo = 0.0 if self.incompressible else ck["rho_min"] * prm.rho0
+        code, i, value = checks.scan(st.pos, st.vel, st.rho, rho_lo, ck["rho_max"] * prm.rho0,
                                      prm.sph, walls.normals, walls.offsets)
         self.counters["checks"] += 1
         if code != checks.OK:

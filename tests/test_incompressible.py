@@ -1,0 +1,118 @@
+"""The divergence-free scheme's pieces (sphcore.physics.solvepairs, sphcore.physics.incompressible)
+against what they must give exactly: the pair list against all pairs, the summed density of
+the initial lattice, the hydrostatic kernel average, the Jacobi weight's eigenvalue, and the
+keys the scheme refuses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sphcore.physics import solvepairs as sp
+from sphcore.physics.kernels import KERNEL_IDS, SUPPORT, kernel_w
+from sphcore.testing import run_case
+
+WENDLAND = KERNEL_IDS["wendland_c2"]
+
+
+def _pairs(pos, h, kid=WENDLAND):
+    """The pair list of ``pos`` as solvepairs builds it: (start, nb, w, g)."""
+    n, dim = pos.shape
+    support = SUPPORT * h
+    cell, order = np.zeros(n, np.int64), np.zeros(n, np.int64)
+    cell_start, nc0, nc1, nc2 = sp.bin_cells(pos, support, cell, order, np.zeros(1, np.int64))
+    start = np.zeros(n + 1, np.int64)
+    sp.count_pairs(pos, support, cell, order, cell_start, nc0, nc1, nc2, start[1:])
+    np.cumsum(start[1:], out=start[1:])
+    m = int(start[-1])
+    nb, w, g = np.zeros(m, np.int64), np.zeros(m), np.zeros((m, dim))
+    sp.fill_pairs(pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, nb, w, g)
+    return start, nb, w, g
+
+
+def _lattice(count, dx):
+    axes = [(np.arange(c) + 0.5) * dx for c in count]
+    return np.ascontiguousarray(np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(count)))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_pair_list_holds_every_pair_within_the_support_once(dim):
+    rng = np.random.default_rng(7)
+    pos = rng.random((400 if dim == 2 else 600, dim)) * 0.3
+    h = 0.03
+    start, nb, w, g = _pairs(pos, h)
+    d = pos[:, None, :] - pos[None, :, :]
+    r = np.sqrt((d * d).sum(-1))
+    for i in range(pos.shape[0]):
+        row = nb[start[i]:start[i + 1]]
+        want = np.flatnonzero((r[i] < SUPPORT * h) & (np.arange(pos.shape[0]) != i))
+        assert sorted(row.tolist()) == want.tolist()
+        # each pair's kernel value and gradient grad_i W_ij = F (x_i - x_j), F < 0
+        for p in range(start[i], start[i + 1]):
+            j = nb[p]
+            assert w[p] == pytest.approx(kernel_w(WENDLAND, r[i, j], h, dim), rel=1e-12)
+            assert np.dot(g[p], pos[i] - pos[j]) <= 0.0
+
+
+@pytest.mark.parametrize("dim,h_over_dx", [(2, 1.3), (2, 2.0), (3, 1.0)])
+def test_the_initial_lattice_sums_to_rho0_inside(dim, h_over_dx):
+    dx, rho0 = 0.01, 1000.0
+    count = (24, 24) if dim == 2 else (12, 12, 12)
+    pos = _lattice(count, dx)
+    h = h_over_dx * dx
+    start, nb, w, g = _pairs(pos, h)
+    n = pos.shape[0]
+    m = np.full(n, rho0 * dx ** dim)
+    sigma = sp.lattice_sum(WENDLAND, h, dx, dim)
+    rho = np.zeros(n)
+    sp.summed_density(rho, start, nb, w, m, kernel_w(WENDLAND, 0.0, h, dim), 1.0 / sigma, np.zeros(n))
+    inner = np.all((pos > SUPPORT * h) & (pos < np.array(count) * dx - SUPPORT * h), axis=1)
+    assert inner.sum() > 0
+    np.testing.assert_allclose(rho[inner], rho0, rtol=1e-12)
+    assert np.all(rho <= rho0 * (1 + 1e-12))  # a truncated support sums less, never more
+    edge = np.any((pos < dx) | (pos > np.array(count) * dx - dx), axis=1)
+    assert np.all(rho[edge] < 0.9 * rho0)
+
+
+def test_the_kernel_average_keeps_a_hydrostatic_pressure_exactly_next_to_walls_and_surface():
+    dx, h = 0.01, 0.013
+    pos = _lattice((20, 30), dx)
+    rng = np.random.default_rng(3)
+    pos += rng.uniform(-0.2, 0.2, pos.shape) * dx  # off the lattice too
+    start, nb, w, g = _pairs(pos, h)
+    n = pos.shape[0]
+    gravity = np.array([0.0, -9.81, 0.0])
+    kappa = 9.81 * (0.3 - pos[:, 1])  # p / rho of water at rest under a surface at 0.3 m
+    rho = np.full(n, 1000.0) * rng.uniform(0.98, 1.02, n)
+    m = np.full(n, 1000.0 * dx * dx)
+    out = np.zeros(n)
+    sp.kernel_average(out, start, nb, w, m, rho, pos, kappa, gravity, kernel_w(WENDLAND, 0.0, h, 2))
+    np.testing.assert_allclose(out, kappa, rtol=0, atol=1e-12)
+    # and it removes a pressure alternating between particle layers (the solves' blind mode)
+    layered = kappa + np.where(np.round(pos[:, 1] / dx - 0.5).astype(int) % 2 == 0, 1.0, -1.0)
+    sp.kernel_average(out, start, nb, w, m, rho, pos, layered, gravity, kernel_w(WENDLAND, 0.0, h, 2))
+    inner = np.all((pos > 3 * h) & (pos < np.array([0.2, 0.3]) - 3 * h), axis=1)
+    assert np.abs(out - kappa)[inner].max() < 0.5 * np.abs(layered - kappa)[inner].min()
+
+
+@pytest.mark.parametrize("dim,h_over_dx,lam", [(2, 1.0, 2.11), (2, 1.3, 2.60), (2, 2.0, 5.67), (3, 1.0, 2.60)])
+def test_plain_jacobi_diverges_on_the_lattice_and_the_weight_keeps_every_mode_below_two(dim, h_over_dx, lam):
+    dx = 1.0
+    h = h_over_dx * dx
+    omega = sp.jacobi_weight(WENDLAND, h, dx, dim)
+    # the largest eigenvalue of the diagonal-scaled operator, the weight's measure of it
+    assert 1.2 / omega == pytest.approx(lam, abs=0.02)
+    assert lam > 2.0  # plain Jacobi (omega = 1) would amplify that mode
+
+
+def test_dfsph_refuses_the_keys_it_cannot_honour(tmp_path):
+    from sphcore.testing import tiny_case, case_with
+
+    base = case_with(tiny_case(), {"scheme.name": "dfsph"})
+    for key, value, named in [("physics.modified_pressure", True, "physics.modified_pressure"),
+                              ("corrections.shepard_every", 5, "corrections.shepard_every"),
+                              ("physics.sph", False, "scheme.name")]:
+        with pytest.raises(Exception) as err:
+            run_case(tmp_path / key, case_with(base, {key: value}))
+        assert named in str(err.value)
+        assert not (tmp_path / key / "output").exists()
