@@ -54,6 +54,7 @@ from sphcore.errors import Instability
 from sphcore.jit.parallel import on_threads_by_size
 from sphcore.physics import solvepairs as sp
 from sphcore.physics.forces import PressureField
+from sphcore.physics.integrators import SchemeBase
 from sphcore.physics.kernels import SUPPORT, kernel_w
 
 KEPT = "dfsph"  # the run state's namespace of the warm starts (run.kept) and the solves' figures
@@ -76,7 +77,7 @@ class SolvedPressure(PressureField):
         """No equation of state: the solves set the pressure."""
 
 
-class DivergenceFree:
+class DivergenceFree(SchemeBase):
     """The DFSPH step (module docstring), with the interface of the weakly compressible
     integrators (:mod:`sphcore.physics.integrators`): :meth:`rates`, :meth:`free_motion`,
     then the walls, then :meth:`finish`.
@@ -88,49 +89,26 @@ class DivergenceFree:
     """
 
     name = "dfsph"
-    evolves_density = False
 
     def __init__(self, run, forces, ctx, scheme: dict):
-        self.run, self.forces, self.ctx = run, forces, ctx
         prm = ctx.params
+        self.forces, self.ctx = forces, ctx
         self.tol_density = scheme["density_tolerance"]
         self.tol_divergence = scheme["divergence_tolerance"]
         self.max_iterations = scheme["max_iterations"]
-        self.cfl = scheme["cfl"]
         self.sigma = sp.lattice_sum(prm.kernel_id, prm.h, prm.dx, prm.dim)
         self.inv_sigma = 1.0 / self.sigma
         self.omega = sp.jacobi_weight(prm.kernel_id, prm.h, prm.dx, prm.dim)
         self.w0 = kernel_w(prm.kernel_id, 0.0, prm.h, prm.dim)
         self.full = self.sigma - prm.dx ** prm.dim * self.w0  # a full neighbourhood's sum_j V_j W_ij (self excluded)
-        self.pos0 = np.zeros((0, 0))
         self._listed = None  # (positions, ids) the pairs were listed at
         self._fresh_walls = False  # the walls' part of the density is to be measured (a new run)
-        self.resize()
-
-    # -- what the simulation reads --------------------------------------------------------
-
-    @property
-    def acc(self) -> np.ndarray:
-        """The non-pressure accelerations of the current particles (m/s^2)."""
-        return self.run.rates.acc
-
-    @property
-    def drho(self) -> np.ndarray:
-        return self.run.rates.drho
-
-    def step_limit(self, vmax: float) -> float:
-        """The flow's CFL limit cfl h / |v|max (s; inf at rest)."""
-        return self.cfl * self.ctx.params.h / vmax if vmax > 0 else np.inf
+        # the rates with zero pressure (SolvedPressure) are the non-pressure accelerations
+        super().__init__(run, forces.evaluate, evolves_density=False)
 
     # -- arrays ---------------------------------------------------------------------------
 
-    def resize(self):
-        st = self.run.particles
-        n, dim = st.n, st.dim
-        self.run.fit_rates()
-        if self.pos0.shape == (n, dim):
-            return
-        self.pos0 = np.zeros((n, dim))
+    def _extra_arrays(self, n, dim):
         self.cell = np.zeros(n, np.int64)
         self.order = np.zeros(n, np.int64)
         self.cell_start = np.zeros(1, np.int64)
@@ -139,13 +117,17 @@ class DivergenceFree:
         self.w = np.zeros(0)
         self.g = np.zeros((0, dim))
         self.alpha = np.zeros(n)
-        self.rho_start = np.zeros(n)
         self.rate = np.zeros(n)
         self.dkappa = np.zeros(n)
         self.err = np.zeros(n)
+        self.moved = np.zeros(n)
+        self.kick = np.zeros((n, dim))
         self.grad_start = np.zeros((n, dim))
-        self.rho0_base = np.zeros(n)
+        self.no_walls = np.zeros((n, dim))  # the wall gradient of a run without wall terms
+        self.no_flux = np.zeros(0)
+        self.rho0_base = np.full(n, self.ctx.params.rho0)
         self._listed = None
+        st = self.run.particles
         kept = self.run.kept.setdefault(KEPT, {})
         for key in ("kappa", "kappa_v", "wall_rho"):
             if key not in kept or kept[key].shape != (n,):
@@ -155,33 +137,23 @@ class DivergenceFree:
             kept["kappa"][:] = st.p / st.rho  # the start's pressure (hydrostatic) as the first warm start
 
     def permute(self, order):
-        """Follow a reordering of the particles: the warm starts move with them."""
+        """Follow a reordering of the particles: the rates, the warm starts and the walls'
+        density part move with them."""
+        super().permute(order)
         kept = self.run.kept[KEPT]
         for key in ("kappa", "kappa_v", "wall_rho"):
             kept[key] = kept[key][order]
-        r = self.run.rates
-        r.acc = r.acc[order]
-        r.drho = r.drho[order]
         self._listed = None
 
-    def invalidate(self):
-        self.run.rates.fresh = False
-
     # -- the step -------------------------------------------------------------------------
-
-    def rates(self):
-        """The non-pressure accelerations of the current particles (the rates with zero pressure)."""
-        r = self.run.rates
-        if not r.fresh:
-            self.forces.evaluate(r.acc, r.drho)
-            r.fresh = True
 
     def free_motion(self, dt):
         """v* = v + dt a_np, the density solve, x += dt v* (``pos0`` keeps x)."""
         st = self.run.particles
         self.rates()
         self._list_pairs(self.forces.wall_terms)
-        st.vel += dt * self.run.rates.acc
+        np.multiply(self.run.rates.acc, dt, out=self.kick)
+        st.vel += self.kick
         kept = self.run.kept[KEPT]
         smooth = self.dkappa  # scratch until the iterations
         self._pass(sp.kernel_average, smooth, self.start, self.nb, self.w, st.m, st.rho, st.pos, kept["kappa"],
@@ -190,7 +162,8 @@ class DivergenceFree:
         n_it, err = self._solve(kept["kappa"], st.rho, dt, self.tol_density, 2, "density")
         self._record("density", n_it, err)
         self.pos0[...] = st.pos
-        st.pos += dt * st.vel
+        np.multiply(st.vel, dt, out=self.kick)
+        st.pos += self.kick
         self.grad_start[...] = self.grad
 
     def finish(self, dt) -> bool:
@@ -201,7 +174,6 @@ class DivergenceFree:
             self._move_walls_density(wall, dt)
         self._list_pairs(lambda: wall)
         kept = self.run.kept[KEPT]
-        self.rho0_base[:] = self.ctx.params.rho0
         n_it, err = self._solve(kept["kappa_v"], self.rho0_base, dt, self.tol_divergence, 1, "divergence")
         self._record("divergence", n_it, err)
         np.multiply(st.rho, kept["kappa"], out=st.p)
@@ -248,15 +220,14 @@ class DivergenceFree:
     def _walls(self, wall):
         """The wall gradient and velocity the solves use; the walls' part of the density
         (``run.kept``) measured at the start of a run (:meth:`_start_walls_density`)."""
-        n, dim = self.run.particles.n, self.ctx.params.dim
+        n = self.run.particles.n
         if not wall.active:
-            self.grad = np.zeros((n, dim))
-            self.flux = np.zeros(0)
+            self.grad, self.flux = self.no_walls, self.no_flux
             return
         if self._fresh_walls:
             self._start_walls_density(wall)
         self.grad = wall.grad
-        self.flux = wall.flux if wall.flux.shape[0] == n else np.zeros(0)
+        self.flux = wall.flux if wall.flux.shape[0] == n else self.no_flux
 
     def _start_walls_density(self, wall):
         """rho0 s_i, s_i the walls' share of particle i's support measured against the
@@ -278,8 +249,12 @@ class DivergenceFree:
         steps and the density solve stalled). Zero where no wall is within the support."""
         st, rho0 = self.run.particles, self.ctx.params.rho0
         w = self.run.kept[KEPT]["wall_rho"]
-        step = np.einsum("ij,ij->i", 0.5 * (self.grad_start + wall.grad), st.pos - self.pos0)
-        w += rho0 * step
+        np.add(self.grad_start, wall.grad, out=self.grad_start)
+        self.grad_start *= 0.5
+        np.subtract(st.pos, self.pos0, out=self.kick)
+        np.einsum("ij,ij->i", self.grad_start, self.kick, out=self.moved)
+        self.moved *= rho0
+        w += self.moved
         if wall.flux.shape[0] == st.n:
             w -= rho0 * dt * wall.flux
         w[wall.share <= 0.0] = 0.0

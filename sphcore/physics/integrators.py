@@ -60,7 +60,7 @@ def _correct(vel, acc_new, acc_old, rho, drho_new, drho_old, half_dt, evolve_den
             rho[i] += half_dt * (drho_new[i] - drho_old[i])
 
 
-class _Scheme:
+class SchemeBase:
     """What both schemes share: the free-motion stage and the scratch arrays.
 
     A scheme is built with the run state (``run.particles`` and ``run.rates``, see
@@ -140,7 +140,7 @@ class _Scheme:
         _drift_kick(self.pos0, st.pos, st.vel, r.acc, st.rho, r.drho, dt, self.half_kick, self.evolves_density)
 
 
-class Euler(_Scheme):
+class Euler(SchemeBase):
     """Explicit (forward) Euler, the paper's scheme; rates at the start of each step."""
 
     name = "euler"
@@ -150,7 +150,7 @@ class Euler(_Scheme):
         return False
 
 
-class Leapfrog(_Scheme):
+class Leapfrog(SchemeBase):
     """Kick-drift-kick leapfrog (see module docstring); rates from the previous step are reused."""
 
     name = "leapfrog"

@@ -82,10 +82,20 @@ def lattice_moment(kernel_id: int, h: float, dx: float, dim: int) -> float:
     completes the missing support should supply lambda of the continuum moment too
     (the wall_integral plugin's completion, :func:`sphcore_plugins.wall_integral.completion.complete_at_wall`).
     """
+    _, r = lattice_nodes(h, dx, dim)
+    f = np.array([kernel_f(kernel_id, ri, h, dim) for ri in r])
+    return float(-(f * r * r).sum() * dx ** dim / dim)
+
+
+def lattice_nodes(h: float, dx: float, dim: int, centre: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """(x, r): the nodes x_k of the square (cubic) lattice of spacing dx about a particle,
+    out to the first whole dx at or beyond the support 2h, in grid order, and their
+    distances; the particle's own node x = 0 only with ``centre``."""
     n = int(math.ceil(SUPPORT * h / dx))
     k = np.arange(-n, n + 1, dtype=np.float64) * dx
     x = np.stack(np.meshgrid(*([k] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
     r = np.sqrt((x * x).sum(axis=1))
-    r = r[r > 0.0]
-    f = np.array([kernel_f(kernel_id, ri, h, dim) for ri in r])
-    return float(-(f * r * r).sum() * dx ** dim / dim)
+    keep = r > 0.0
+    if centre:
+        return x, r
+    return x[keep], r[keep]

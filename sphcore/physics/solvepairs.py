@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphcore.physics.kernels import SUPPORT, kernel_f, kernel_w
+from sphcore.physics.kernels import SUPPORT, kernel_f, kernel_w, lattice_nodes
 
 LIST_PARALLEL_MIN = 1000  # particles: the passes run on one thread below (a launch costs more)
 
@@ -33,11 +33,8 @@ LIST_PARALLEL_MIN = 1000  # particles: the passes run on one thread below (a lau
 def lattice_sum(kernel_id: int, h: float, dx: float, dim: int) -> float:
     """sigma0 = sum_k dx^dim W(|x_k|) over the square (cubic) lattice of spacing dx, self
     included: the kernel sum of an interior particle of the initial lattice (1 in the
-    continuum; e.g. 0.99 for Wendland C2 at h = 1.3 dx in 2D)."""
-    n = int(math.ceil(SUPPORT * h / dx))
-    k = np.arange(-n, n + 1, dtype=np.float64) * dx
-    x = np.stack(np.meshgrid(*([k] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
-    r = np.sqrt((x * x).sum(axis=1))
+    continuum; e.g. 1.0105 for Wendland C2 at h = 1.3 dx in 2D)."""
+    _, r = lattice_nodes(h, dx, dim, centre=True)
     return float(sum(kernel_w(kernel_id, ri, h, dim) for ri in r) * dx ** dim)
 
 
@@ -53,11 +50,8 @@ def jacobi_weight(kernel_id: int, h: float, dx: float, dim: int, target: float =
     2.6 at h = 1.3 dx and 5.7 at h = 2 dx; 2.6 in 3D at h = dx and 4.2 at h = 1.3 dx. The
     weight puts the largest at ``target``, 1.2, below 2 with room for particles off the
     lattice; the long waves then converge at 1 - 1.2 lambda(k) / lambda_max a step."""
-    n = int(math.ceil(SUPPORT * h / dx))
-    k = np.arange(-n, n + 1, dtype=np.float64) * dx
-    x = np.stack(np.meshgrid(*([k] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
-    r = np.sqrt((x * x).sum(axis=1))
-    keep = (r > 0.0) & (r < SUPPORT * h)
+    x, r = lattice_nodes(h, dx, dim)
+    keep = r < SUPPORT * h
     x, r = x[keep], r[keep]
     g = np.array([kernel_f(kernel_id, ri, h, dim) for ri in r])[:, None] * x
     diag = float((g * g).sum())
