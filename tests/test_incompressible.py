@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sphcore.physics import solvepairs as sp
-from sphcore.physics.kernels import KERNEL_IDS, SUPPORT, kernel_w
+from sphcore.physics.kernels import KERNEL_IDS, SUPPORT, kernel_f, kernel_w, lattice_nodes
 from sphcore.testing import run_case
 
 WENDLAND = KERNEL_IDS["wendland_c2"]
@@ -96,13 +96,39 @@ def test_the_kernel_average_keeps_a_hydrostatic_pressure_exactly_next_to_walls_a
 
 
 @pytest.mark.parametrize("dim,h_over_dx,lam", [(2, 1.0, 2.11), (2, 1.3, 2.60), (2, 2.0, 5.67), (3, 1.0, 2.60)])
-def test_plain_jacobi_diverges_on_the_lattice_and_the_weight_keeps_every_mode_below_two(dim, h_over_dx, lam):
-    dx = 1.0
-    h = h_over_dx * dx
-    omega = sp.jacobi_weight(WENDLAND, h, dx, dim)
-    # the largest eigenvalue of the diagonal-scaled operator, the weight's measure of it
-    assert 1.2 / omega == pytest.approx(lam, abs=0.02)
-    assert lam > 2.0  # plain Jacobi (omega = 1) would amplify that mode
+def test_the_operator_s_largest_eigenvalue_exceeds_two_so_plain_jacobi_diverges(dim, h_over_dx, lam):
+    # from the symbol, and recomputed by an independent script over the same wave grid
+    assert sp.lattice_eigenvalue(WENDLAND, h_over_dx, 1.0, dim) == pytest.approx(lam, abs=0.01)
+    assert lam > 2.0
+
+
+@pytest.mark.parametrize("wave", [(0.3, 0.35), (0.18, 0.23), (0.5, 0.0)])
+def test_the_operator_applied_to_a_wave_gives_the_symbol_s_eigenvalue(wave):
+    # kappa = cos(k . x) on a lattice: the pressure kick of kappa (dt = 1, from rest) then the
+    # density rate give -lambda(k) kappa_i / alpha_i inside, the eigenvalue the Chebyshev
+    # interval is built from
+    dx, h, rho0 = 1.0, 1.3, 1000.0
+    pos = _lattice((40, 40), dx)
+    start, nb, w, g = _pairs(pos, h)
+    n = pos.shape[0]
+    m = np.full(n, rho0 * dx * dx)
+    rho = np.full(n, rho0)
+    inv_sigma = 1.0 / sp.lattice_sum(WENDLAND, h, dx, 2)
+    grad = np.zeros((n, 2))
+    k = np.pi * np.array(wave) / dx
+    kappa = np.cos(pos @ k)
+    vel = np.zeros((n, 2))
+    sp.pressure_kick(vel, start, nb, g, m, rho, kappa, grad, rho0, 1.0)
+    rate, alpha = np.zeros(n), np.zeros(n)
+    sp.density_rate(rate, start, nb, g, m, vel, grad, np.zeros(0), rho0, inv_sigma)
+    sp.diagonal(alpha, start, nb, g, m, rho, grad, rho0, inv_sigma)
+    x, r = lattice_nodes(h, dx, 2)
+    x = x[r < SUPPORT * h]
+    gl = np.array([kernel_f(WENDLAND, ri, h, 2) for ri in r[r < SUPPORT * h]])[:, None] * x
+    t = np.sin(x @ k) @ gl
+    symbol = float(t @ t) / float((gl * gl).sum())
+    inner = np.all((pos > 3 * SUPPORT * h) & (pos < 40 * dx - 3 * SUPPORT * h), axis=1) & (np.abs(kappa) > 0.3)
+    np.testing.assert_allclose(-rate[inner] * alpha[inner] / kappa[inner], symbol, rtol=1e-9)
 
 
 def test_dfsph_refuses_the_keys_it_cannot_honour(tmp_path):

@@ -38,18 +38,17 @@ def lattice_sum(kernel_id: int, h: float, dx: float, dim: int) -> float:
     return float(sum(kernel_w(kernel_id, ri, h, dim) for ri in r) * dx ** dim)
 
 
-def jacobi_weight(kernel_id: int, h: float, dx: float, dim: int, target: float = 1.2) -> float:
-    """The weight omega of the solves' Jacobi steps: ``target`` over the largest eigenvalue
-    of the diagonal-scaled operator on the initial lattice, at most 1.
+def lattice_eigenvalue(kernel_id: int, h: float, dx: float, dim: int) -> float:
+    """The largest eigenvalue lambda_max of the solves' operator scaled by its diagonal, on
+    the initial lattice.
 
     On the lattice the operator kappa -> D rho has the symbol |T(k)|^2 / rho with
     T(k) = sum_j m_j sin(k . x_ji) grad_i W_ij, and its diagonal m_i sum_j m_j |grad W_ij|^2
-    / rho, so a Jacobi step multiplies the mode k by 1 - omega lambda(k), lambda =
-    |T|^2 / (m sum_j m_j |grad W|^2). Plain Jacobi (omega = 1, Bender & Koschier 2017)
-    diverges where lambda > 2: measured on the lattice, lambda_max = 2.1 in 2D at h = dx,
-    2.6 at h = 1.3 dx and 5.7 at h = 2 dx; 2.6 in 3D at h = dx and 4.2 at h = 1.3 dx. The
-    weight puts the largest at ``target``, 1.2, below 2 with room for particles off the
-    lattice; the long waves then converge at 1 - 1.2 lambda(k) / lambda_max a step."""
+    / rho, so lambda(k) = |T|^2 / (m sum_j m_j |grad W|^2), maximised here over a grid of
+    wave vectors. A Jacobi step multiplies the mode k by 1 - lambda(k): plain Jacobi
+    (Bender & Koschier 2017) diverges where lambda > 2, and on the lattice lambda_max = 2.1
+    in 2D at h = dx, 2.6 at h = 1.3 dx and 5.7 at h = 2 dx; 2.6 in 3D at h = dx and 4.2 at
+    h = 1.3 dx."""
     x, r = lattice_nodes(h, dx, dim)
     keep = r < SUPPORT * h
     x, r = x[keep], r[keep]
@@ -58,8 +57,7 @@ def jacobi_weight(kernel_id: int, h: float, dx: float, dim: int, target: float =
     waves = np.linspace(0.0, math.pi / dx, 41 if dim == 2 else 21)
     kk = np.stack(np.meshgrid(*([waves] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
     t = np.sin(kk @ x.T) @ g
-    lam_max = float(((t * t).sum(axis=1)).max()) / diag
-    return min(1.0, target / lam_max)
+    return float(((t * t).sum(axis=1)).max()) / diag
 
 
 @njit(cache=True)
@@ -266,19 +264,29 @@ def pressure_kick(vel, start, nb, g, m, rho, kappa, grad, rho0, dt):
 
 
 @njit(cache=True, parallel=True)
-def jacobi_update(dkappa, err, base, rate, dt, rho0, kappa, alpha, scale):
-    """One projected Jacobi step of a solve: the error e_i = base_i + dt rate_i - rho0 (the
-    density solve, base = rho; the divergence solve, base = rho0, e = dt rate), the new
-    kappa_i = max(kappa_i + e_i alpha_i * scale, 0) and dkappa_i its change: the pressure
-    never pulls (no tension), and a particle whose kappa is zero and which expands (the
-    free surface) is solved, its err_i = 0; else err_i = |e_i|."""
-    for i in prange(dkappa.shape[0]):
+def residual(z, err, base, rate, dt, rho0, kappa, alpha, scale):
+    """The error of a solve, e_i = base_i + dt rate_i - rho0 (the density solve, base = rho;
+    the divergence solve, base = rho0, e = dt rate), and its Jacobi correction
+    z_i = e_i alpha_i * scale; err_i = |e_i|, or 0 for a particle at zero pressure that
+    expands (the free surface, where the projection holds kappa at zero)."""
+    for i in prange(z.shape[0]):
         e = base[i] + dt * rate[i] - rho0
-        k = kappa[i] + e * alpha[i] * scale
-        if k <= 0.0:
+        z[i] = e * alpha[i] * scale
+        err[i] = 0.0 if (kappa[i] <= 0.0 and e < 0.0) else abs(e)
+
+
+@njit(cache=True, parallel=True)
+def projected_step(d, z, kappa, c_old, c_new):
+    """d_i <- c_old d_i + c_new z_i, the step of a (Chebyshev-accelerated) Jacobi
+    iteration, then projected: kappa_i <- max(kappa_i + d_i, 0) and d_i the change made
+    (the pressure never pulls)."""
+    for i in prange(d.shape[0]):
+        step = c_old * d[i] + c_new * z[i]
+        k = kappa[i] + step
+        if k < 0.0:
             k = 0.0
-        dkappa[i] = k - kappa[i]
-        err[i] = 0.0 if (k == 0.0 and e < 0.0) else abs(e)
+        d[i] = k - kappa[i]
+        kappa[i] = k
 
 
 @njit(cache=True, parallel=True)
