@@ -94,6 +94,9 @@ CORE: dict[str, dict[str, O]] = {
                   "sound speed); dfsph: divergence-free incompressible (pressure from two solves a step, step from the "
                   "flow's velocity; docs/explanation/incompressible_scheme.md)", choices=("wcsph", "dfsph")),
         "cfl": O(0.3, "float", positive=True, doc="dfsph: dt <= cfl * h / |v|max (the flow's Courant number)"),
+        "force_factor": O(0.1, "float", positive=True,
+                          doc="dfsph: dt <= force_factor * sqrt(h / |a|max), a the non-pressure acceleration (water at "
+                              "rest in cases/hydrostatic_tank is unstable with 0.25, time.force_factor's default)"),
         "density_tolerance": O(1e-4, "float", positive=True,
                                doc="dfsph: the density solve stops when the mean |rho* - rho0| / rho0 is below this"),
         "divergence_tolerance": O(1e-3, "float", positive=True,

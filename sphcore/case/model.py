@@ -321,4 +321,7 @@ def _check_incompressible(file, cfg) -> None:
     if cfg["corrections"]["shepard_every"]:
         raise CaseError(file, "corrections.shepard_every", "dfsph sums its density every step: expected 0 with "
                         "scheme.name = \"dfsph\"")
+    if cfg["bodies"]:
+        raise CaseError(file, "bodies", "floating bodies are not coupled to dfsph's solves (their loads would miss the "
+                        "solved pressure): use scheme.name = \"wcsph\"")
 

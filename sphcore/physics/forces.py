@@ -85,6 +85,7 @@ class Forces:
         self.wants_walls = "sph_wall_terms" in hook.implemented
         self.completion = wall_completion(ctx, hook) if self.wants_walls else None
         self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
+        self.records_reaction = False  # keep WallTerms.react without moving walls (set by the scheme)
         self._L = np.zeros((1, 3, 3))
         self._grid = None
         skin = ctx.case.config["neighbours"]["skin"] * ctx.params.support
@@ -189,7 +190,7 @@ class Forces:
 
     def wall_react(self):
         """The acceleration the wall completion gave each particle at the last evaluation
-        (``WallTerms.react``, runs with moving walls), or None."""
+        (``WallTerms.react``: runs with moving walls, or where a scheme asks for it), or None."""
         react = self._wall.react
         return react if self._wall.active and react.shape[0] == self.ctx.state.n else None
 
@@ -200,9 +201,12 @@ class Forces:
         n, dim = self.ctx.state.n, self.ctx.params.dim
         if self._wall.share.shape[0] != n:
             moving = n if getattr(self.ctx.case, "moving", ()) else 0  # moving walls' terms, else empty
+            # the completion's own acceleration: the loads of moving walls, and the incompressible
+            # scheme's scaling of the walls' hydrostatic push (sphcore.physics.incompressible)
+            react = n if moving or self.records_reaction else 0
             self._wall = WallTerms(np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim)), np.zeros((n, dim, dim)),
                                    np.zeros(n), True, np.zeros(moving), np.zeros((moving, dim)),
-                                   np.zeros((moving, dim)))
+                                   np.zeros((react, dim)))
         w = self._wall
         w.share[:] = 0.0
         w.grad[:] = 0.0

@@ -172,8 +172,10 @@ class Simulation:
             if self.case.moving:  # a wall's speed limits the step as a particle's does
                 vmax = max(vmax, wall_speed(self.case.moving, self.t, self.state.pos))
             # the incompressible scheme's step follows the flow: no sound speed, its own CFL number
-            c0, cfl = (0.0, self.case.config["scheme"]["cfl"]) if self.incompressible else (prm.c0, tcfg["cfl"])
-            dt = adaptive_dt(prm.h, c0, prm.nu, vmax, amax, cfl, tcfg["force_factor"], tcfg["viscous_factor"])
+            scheme = self.case.config["scheme"]
+            c0, cfl, force = ((0.0, scheme["cfl"], scheme["force_factor"]) if self.incompressible
+                              else (prm.c0, tcfg["cfl"], tcfg["force_factor"]))
+            dt = adaptive_dt(prm.h, c0, prm.nu, vmax, amax, cfl, force, tcfg["viscous_factor"])
             if tcfg["dt_max"] is not None:
                 dt = min(dt, tcfg["dt_max"])
         bounds = [b for b in self.hooks.sph_max_dt(ctx=self.ctx) if b is not None]
