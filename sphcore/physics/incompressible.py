@@ -71,6 +71,7 @@ CHEBYSHEV_HIGH = 1.3
 # a solve not converged after this many iterations restarts the recursion with the
 # interval's low end a quarter as high: what is left are waves longer than it was built for
 CHEBYSHEV_CYCLE = 40
+CHEBYSHEV_FLOOR = 0.0025  # at most two widenings: wider, the walls' modes grew (the still tank at h = 2 dx)
 KEPT = "dfsph"  # the run state's namespace of the warm starts (run.kept) and the solves' figures
 
 
@@ -333,7 +334,7 @@ class DivergenceFree(SchemeBase):
                                   f"the {what} solve did not converge in {self.max_iterations} iterations: mean error "
                                   f"{err:.3g} of rho0 against scheme.{what}_tolerance = {tol:g} ({hint})")
             if cycle == CHEBYSHEV_CYCLE:  # the long waves left: restart on a wider interval
-                lmin *= 0.25
+                lmin = max(0.25 * lmin, CHEBYSHEV_FLOOR * lmax / CHEBYSHEV_HIGH)
                 cycle = 0
             if cycle == 0:
                 theta, delta = 0.5 * (lmax + lmin), 0.5 * (lmax - lmin)
