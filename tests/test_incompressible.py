@@ -137,7 +137,9 @@ def test_dfsph_refuses_the_keys_it_cannot_honour(tmp_path):
     base = case_with(tiny_case(), {"scheme.name": "dfsph"})
     for key, value, named in [("physics.modified_pressure", True, "physics.modified_pressure"),
                               ("corrections.shepard_every", 5, "corrections.shepard_every"),
-                              ("physics.sph", False, "scheme.name")]:
+                              ("physics.sph", False, "scheme.name"),
+                              ("plugins.use", ["ghost", "reflective"], "plugins.use"),
+                              ("bodies", [{"wall": 0, "density": 500.0}], "bodies")]:
         with pytest.raises(Exception) as err:
             run_case(tmp_path / key, case_with(base, {key: value}))
         assert named in str(err.value)
