@@ -138,8 +138,16 @@ def new_dataset(path: Path, title: str, comment: str, attrs: dict) -> netCDF4.Da
         })
     except (OSError, RuntimeError) as err:
         del ds  # not close(): see NetcdfWriter._abandon
+        drop_cut(path)
         raise output_error(path, "write the netCDF header", err) from err
     return ds
+
+
+def drop_cut(path: Path) -> None:
+    """Remove a netCDF file whose header could not be written (a full disk): it holds no
+    frame and cannot be read as a series, so the run leaves none rather than an unreadable
+    one. The file is this run's own, created with mode "w" a moment before."""
+    path.unlink(missing_ok=True)
 
 
 class NetcdfWriter(ScheduledWriter):
@@ -253,6 +261,7 @@ class NetcdfWriter(ScheduledWriter):
             ds.sync()
         except (OSError, RuntimeError) as err:
             del ds  # not close(): see _abandon
+            drop_cut(self.path)
             self._failed = True
             raise output_error(self.path, "write the netCDF header", err) from err
         self.ds, self.row, self.ids = ds, 0, st.id[order].copy()
@@ -324,14 +333,16 @@ def series_on_disk(path: Path, names):
 
 
 def header_cut(path: Path, names) -> bool:
-    """Was the file cut while its header was written (a run killed inside its first frame's
-    create, which syncs the whole header before any frame): empty, or without every one of
-    the variables ``names``? Such a file holds no frame; a restart writes it anew."""
+    """Was the file cut while its header was written (a run killed, or its disk full, inside
+    its first frame's create, which syncs the whole header before any frame): empty, without
+    every one of the variables ``names``, or without a single record? The last covers a
+    header whose variables were declared but whose static data (the particle ids) never
+    reached the disk. Such a file holds no frame; a restart writes it anew."""
     import netCDF4
     if path.stat().st_size == 0:
         return True
     with netCDF4.Dataset(path) as src:
-        return not set(names) <= set(src.variables)
+        return not set(names) <= set(src.variables) or len(src.dimensions["time"]) == 0
 
 
 def rewrite_first(path: Path, keep: int) -> None:

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from sphcore.api import OutputError, ScheduledWriter, hookimpl, leading_complete, rotation_vector, write_atomically
-from sphcore_plugins.netcdf import case_attributes, header_cut, new_dataset, output_error, rewrite_first, series_on_disk
+from sphcore_plugins.netcdf import case_attributes, drop_cut, header_cut, new_dataset, output_error, rewrite_first, series_on_disk
 
 TABLE = "wall_loads"
 FILE_NAME = "wall_loads.nc"
@@ -157,6 +157,8 @@ class WallLoadsWriter(ScheduledWriter):
                     {"units": unit, "long_name": meaning})
             ds.sync()
         except (OSError, RuntimeError) as err:
+            del ds  # not close(): see sphcore_plugins.netcdf.NetcdfWriter._abandon
+            drop_cut(self.path)
             raise output_error(self.path, "write the wall loads' header", err) from err
         self.ds, self.row = ds, 0
 

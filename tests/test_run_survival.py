@@ -374,6 +374,39 @@ def test_full_disk_at_every_write_point(dam, tmp_path, capsys, monkeypatch, poin
     assert s["status"] == "completed" and s["t"] == 0.3
 
 
+def test_full_disk_at_the_netcdf_header_leaves_no_unreadable_file(dam, tmp_path, capsys, monkeypatch):
+    """The disk fills while particles.nc's header is synced (its variables declared, the
+    particle ids not yet on disk): the run exits 1 with one line and leaves no particles.nc
+    (a file that cannot be read as frames), and --restart finishes with the uninterrupted
+    run's end state."""
+    import netCDF4
+
+    case_dir, ref = dam
+    out = tmp_path / "out"
+    argv = ["run", case_dir, "--output", out, "--progress", "off", *CKPT]
+    calls = {"n": 0}
+
+    class FullAtHeader(netCDF4.Dataset):
+        def sync(self):
+            if self.filepath().endswith("particles.nc") and "id" in self.variables and calls["n"] == 0:
+                calls["n"] += 1
+                raise _enospc(self.filepath())
+            return super().sync()
+
+    with monkeypatch.context() as m:
+        m.setattr(netCDF4, "Dataset", FullAtHeader)
+        status, _, err = cli_main(capsys, *argv)
+    assert calls["n"] == 1  # the fault was hit
+    assert status == 1, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "cannot write the netCDF header: No space left on device" in lines[0], err
+    assert not (out / "particles.nc").exists() and stray_files(out) == []
+    checkpoint_by_id(out)  # the last good checkpoint loads
+    status, _, err = cli_main(capsys, *argv, "--restart")
+    assert status == 0, err
+    assert_same_as_reference(out, ref)
+
+
 def test_periodic_checkpoint_schedule():
     from sphcore.run.activities import StepInterval, periodic
     from sphcore.run.state import Clock
