@@ -58,7 +58,7 @@ from sphcore.jit.parallel import on_threads_by_size
 from sphcore.physics import solvepairs as sp
 from sphcore.physics.forces import PressureField
 from sphcore.physics.integrators import SchemeBase
-from sphcore.physics.kernels import SUPPORT, kernel_w
+from sphcore.physics.kernels import SUPPORT, kernel_w, lattice_nodes
 
 # the interval [low, high] lambda_max the Chebyshev acceleration is built for: above the
 # lattice's largest eigenvalue with room for particles off the lattice, and low enough for
@@ -72,6 +72,13 @@ CHEBYSHEV_HIGH = 1.3
 # interval's low end a quarter as high: what is left are waves longer than it was built for
 CHEBYSHEV_CYCLE = 40
 CHEBYSHEV_FLOOR = 0.0025  # at most two widenings: wider, the walls' modes grew (the still tank at h = 2 dx)
+# the divergence solve corrects only particles with at least this share of a full
+# neighbourhood (the lattice's neighbours; a wall counts with its share of the support):
+# a splash or surface particle with few partners has a near-zero diagonal, and a pair of
+# droplets closing in at the support's edge took kappa_v = 3e9 and flew off at 5 km/s (the
+# Buchner dam break at 1.25 s). SPlisHSPlasH's DFSPH skips such particles likewise (7 of 8
+# lattice neighbours in 2D, 20 of 26 in 3D at its support of 2 dx).
+FULL_SHARE = 0.75
 KEPT = "dfsph"  # the run state's namespace of the warm starts (run.kept) and the solves' figures
 
 
@@ -118,6 +125,8 @@ class DivergenceFree(SchemeBase):
         self.spectrum = (CHEBYSHEV_LOW * lam, CHEBYSHEV_HIGH * lam)
         self.w0 = kernel_w(prm.kernel_id, 0.0, prm.h, prm.dim)
         self.full = self.sigma - prm.dx ** prm.dim * self.w0  # a full neighbourhood's sum_j V_j W_ij (self excluded)
+        _, r = lattice_nodes(prm.h, prm.dx, prm.dim)
+        self.n_full = int(np.count_nonzero(r < SUPPORT * prm.h))  # a full neighbourhood's partners
         self._listed = None  # (positions, ids) the pairs were listed at
         self._fresh_walls = False  # the walls' part of the density is to be measured (a new run)
         # the walls' hydrostatic push, scaled from the lattice's gradient to the solved one's
@@ -132,11 +141,12 @@ class DivergenceFree(SchemeBase):
         self.cell = np.zeros(n, np.int64)
         self.order = np.zeros(n, np.int64)
         self.cell_start = np.zeros(1, np.int64)
-        self.start = np.zeros(n + 1, np.int64)
-        self.nb = np.zeros(0, np.int64)
-        self.w = np.zeros(0)
-        self.g = np.zeros((0, dim))
+        self.counts = np.zeros(n, np.int64)
+        self.end = np.zeros(n, np.int64)
+        self._rows(n, self.n_full + self.n_full // 2)
         self.alpha = np.zeros(n)
+        self.alpha_v = np.zeros(n)
+        self.partners = np.zeros(n)
         self.rate = np.zeros(n)
         self.dkappa = np.zeros(n)
         self.step_d = np.zeros(n)
@@ -199,8 +209,8 @@ class DivergenceFree(SchemeBase):
         st.vel += self.kick
         kept = self.run.kept[KEPT]
         smooth = self.dkappa  # scratch until the iterations
-        self._pass(sp.kernel_average, smooth, self.start, self.nb, self.w, st.m, st.rho, st.pos, kept["kappa"],
-                   self.ctx.params.gravity, self.w0)
+        self._pass(sp.kernel_average, smooth, self.start, self.end, self.nb, self.w, st.m, st.rho, st.pos,
+                   kept["kappa"], self.ctx.params.gravity, self.w0)
         np.maximum(smooth, 0.0, out=kept["kappa"])
         n_it, err = self._solve(kept["kappa"], st.rho, dt, self.tol_density, 2, "density")
         self._record("density", n_it, err)
@@ -217,13 +227,28 @@ class DivergenceFree(SchemeBase):
             self._move_walls_density(wall, dt)
         self._list_pairs(lambda: wall)
         kept = self.run.kept[KEPT]
-        n_it, err = self._solve(kept["kappa_v"], self.rho0_base, dt, self.tol_divergence, 1, "divergence")
+        # the partners, a wall counted by its share: full neighbourhoods take part (FULL_SHARE)
+        np.copyto(self.partners, self.counts, casting="unsafe")
+        self.partners += kept["wall_rho"] * (self.n_full / self.ctx.params.rho0)
+        full = self.partners >= FULL_SHARE * self.n_full
+        np.multiply(self.alpha, full, out=self.alpha_v)
+        kept["kappa_v"] *= full
+        n_it, err = self._solve(kept["kappa_v"], self.rho0_base, dt, self.tol_divergence, 1, "divergence",
+                                self.alpha_v)
         self._record("divergence", n_it, err)
         np.multiply(st.rho, kept["kappa"], out=st.p)
         self.run.rates.fresh = False
         return False
 
     # -- pieces ---------------------------------------------------------------------------
+
+    def _rows(self, n, cap):
+        """Rows of ``cap`` pairs for ``n`` particles: particle i's from start[i] = i cap."""
+        self.cap = cap
+        self.start = np.arange(n, dtype=np.int64) * cap
+        self.nb = np.zeros(n * cap, np.int64)
+        self.w = np.zeros(n * cap)
+        self.g = np.zeros((n * cap, self.ctx.params.dim))
 
     def _pass(self, kernel, *args):
         on_threads_by_size(args[0].shape[0], sp.LIST_PARALLEL_MIN, kernel, *args)
@@ -240,22 +265,19 @@ class DivergenceFree(SchemeBase):
             self.cell_start, nc0, nc1, nc2 = sp.bin_cells(st.pos, support, self.cell, self.order, self.cell_start)
         except Exception as e:  # a particle far away: a grid too large to allocate
             raise Instability(self.ctx.step, self.ctx.t, -1, f"neighbour search failed: {e}") from None
-        counts = self.start[1:]
-        self._pass(sp.count_pairs, st.pos, support, self.cell, self.order, self.cell_start, nc0, nc1, nc2, counts)
-        self.start[0] = 0
-        np.cumsum(counts, out=counts)
-        npairs = int(self.start[-1])
-        if self.nb.shape[0] < npairs:
-            size = npairs + npairs // 8
-            self.nb = np.zeros(size, np.int64)
-            self.w = np.zeros(size)
-            self.g = np.zeros((size, prm.dim))
-        self._pass(sp.fill_pairs, st.pos, support, self.cell, self.order, self.cell_start, nc0, nc1, nc2,
-                   prm.kernel_id, prm.h, self.start, self.nb, self.w, self.g)
+        n = st.n
+        while True:
+            self._pass(sp.fill_pairs, st.pos, support, self.cell, self.order, self.cell_start, nc0, nc1, nc2,
+                       prm.kernel_id, prm.h, self.start, self.cap, self.nb, self.w, self.g, self.counts)
+            most = int(self.counts.max()) if n else 0
+            if most <= self.cap:
+                break
+            self._rows(n, most + most // 4)  # a row overflowed: larger rows, the walk again
+        np.add(self.start, self.counts, out=self.end)
         self._walls(wall_terms())
-        self._pass(sp.summed_density, st.rho, self.start, self.nb, self.w, st.m, self.w0, self.inv_sigma,
+        self._pass(sp.summed_density, st.rho, self.start, self.end, self.nb, self.w, st.m, self.w0, self.inv_sigma,
                    self.run.kept[KEPT]["wall_rho"])
-        self._pass(sp.diagonal, self.alpha, self.start, self.nb, self.g, st.m, st.rho, self.grad, prm.rho0,
+        self._pass(sp.diagonal, self.alpha, self.start, self.end, self.nb, self.g, st.m, st.rho, self.grad, prm.rho0,
                    self.inv_sigma)
         self._listed = (st.pos.copy(), st.id.copy())
         self.ctx.counters["dfsph_pair_lists"] += 1
@@ -303,15 +325,18 @@ class DivergenceFree(SchemeBase):
         w[wall.share <= 0.0] = 0.0
         np.maximum(w, 0.0, out=w)
 
-    def _solve(self, kappa, base, dt, tol, min_it, what):
+    def _solve(self, kappa, base, dt, tol, min_it, what, alpha=None):
         """Chebyshev-accelerated, projected Jacobi iterations of one solve from the warm
         start ``kappa`` (updated in place; Saad 2003, Algorithm 12.1, on the interval
         ``self.spectrum`` of the diagonal-scaled operator): the velocities take the
         pressure of the warm start, then of each step, until the mean error (of rho0) is
-        below ``tol``. Returns (iterations, mean error)."""
+        below ``tol``; ``alpha`` the Jacobi weights (the diagonal's inverse; 0 for a particle
+        the solve leaves alone). Returns (iterations, mean error)."""
         st, prm = self.run.particles, self.ctx.params
+        alpha = self.alpha if alpha is None else alpha
         rho0 = prm.rho0
-        self._pass(sp.pressure_kick, st.vel, self.start, self.nb, self.g, st.m, st.rho, kappa, self.grad, rho0, dt)
+        self._pass(sp.pressure_kick, st.vel, self.start, self.end, self.nb, self.g, st.m, st.rho, kappa, self.grad,
+                   rho0, dt)
         scale = 1.0 / (dt * dt)
         lmin, lmax = self.spectrum
         cycle = 0  # iterations since the recursion (re)started
@@ -319,9 +344,9 @@ class DivergenceFree(SchemeBase):
         d = self.step_d
         it = 0
         while True:
-            self._pass(sp.density_rate, self.rate, self.start, self.nb, self.g, st.m, st.vel, self.grad, self.flux,
-                       rho0, self.inv_sigma)
-            self._pass(sp.residual, self.dkappa, self.err, base, self.rate, dt, rho0, kappa, self.alpha, scale)
+            self._pass(sp.density_rate, self.rate, self.start, self.end, self.nb, self.g, st.m, st.vel, self.grad,
+                       self.flux, rho0, self.inv_sigma)
+            self._pass(sp.residual, self.dkappa, self.err, base, self.rate, dt, rho0, kappa, alpha, scale)
             err = float(self.err.sum()) / (n * rho0)
             if it >= min_it and err <= tol:
                 return it, err
@@ -347,7 +372,8 @@ class DivergenceFree(SchemeBase):
                 rk = rn
             cycle += 1
             self._pass(sp.projected_step, d, self.dkappa, kappa, c_old, c_new)
-            self._pass(sp.pressure_kick, st.vel, self.start, self.nb, self.g, st.m, st.rho, d, self.grad, rho0, dt)
+            self._pass(sp.pressure_kick, st.vel, self.start, self.end, self.nb, self.g, st.m, st.rho, d, self.grad,
+                       rho0, dt)
             it += 1
 
     def _record(self, what, n_it, err):

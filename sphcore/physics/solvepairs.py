@@ -2,15 +2,18 @@
 
 The solves of a step sweep the same pairs a few to a few tens of times, so the pairs are
 listed once per step with what every pass reads of them: a full (both-ways) neighbour list
-in compressed rows, ``start`` (n + 1,) and ``nb`` (pairs,), with each pair's kernel value
-``w`` = W_ij and gradient ``g`` = grad_i W_ij (pairs, dim). Each pass is then a gather over
-the rows: particle i sums its own row, in the row's order, and writes only its own entry,
-so the passes run in parallel without races and give the same bits for any thread count.
+in rows of a fixed capacity, particle i's partners ``nb[start[i]:end[i]]`` with
+``start[i] = i cap``, and each pair's kernel value ``w`` = W_ij and gradient
+``g`` = grad_i W_ij. Each pass is then a gather over the rows: particle i sums its own row,
+in the row's order, and writes only its own entry, so the passes run in parallel without
+races and give the same bits for any thread count.
 
 The list is built by binning the particles into cells of the support's size (a counting
-sort) and walking, for each particle, the 3^dim cells around its own: once to count the
-pairs and once to fill them. Rows hold the partners cell by cell, in the cells' sorted
-order: the list depends on the positions and the particles' order only.
+sort) and walking, for each particle, the 3^dim cells around its own, once: the partners
+are written into the particle's row as they are found. A row that overflows its capacity
+is counted to the end and the walk repeated with a larger one (rare: the capacity follows
+the fullest row seen). Rows hold the partners cell by cell, in the cells' sorted order:
+the list depends on the positions and the particles' order only.
 
 Symbols (module docstring of :mod:`sphcore.physics.incompressible`): m mass, rho density,
 kappa = p / rho the solves' pressure variable, G the walls' share gradient (1/m), rho0 the
@@ -105,9 +108,9 @@ def bin_cells(pos, support, cell, order, cell_start):
 
 
 @njit(cache=True, inline="always")
-def _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, nb, w, g, fill):
-    """Particle i's partners within the support: counted (``fill`` false) or written from
-    ``start[i]`` into nb, w, g (``fill`` true); returns the count."""
+def _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g):
+    """Particle i's partners within the support, written from ``start[i]`` into nb, w, g
+    while the row's capacity ``cap`` lasts; returns their count (all of them)."""
     dim = pos.shape[1]
     r2max = support * support
     c = cell[i]
@@ -117,7 +120,7 @@ def _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start
     lo2 = -1 if dim == 3 else 0
     hi2 = 1 if dim == 3 else 0
     cnt = 0
-    p = start[i] if fill else 0
+    p = start[i]
     for o2 in range(lo2, hi2 + 1):
         c2 = ci2 + o2
         if c2 < 0 or c2 >= nc2:
@@ -141,7 +144,7 @@ def _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start
                         r2 += x * x
                     if r2 >= r2max:
                         continue
-                    if fill:
+                    if cnt < cap:
                         r = math.sqrt(r2)
                         nb[p] = j
                         w[p] = kernel_w(kid, r, h, dim)
@@ -154,35 +157,25 @@ def _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start
 
 
 @njit(cache=True, parallel=True)
-def count_pairs(pos, support, cell, order, cell_start, nc0, nc1, nc2, counts):
-    """counts[i] = particle i's partners within the support (self excluded)."""
-    dummy_i = np.empty(0, np.int64)
-    dummy_f = np.empty(0)
-    dummy_g = np.empty((0, pos.shape[1]))
+def fill_pairs(pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g, counts):
+    """Rows start[i]:start[i] + counts[i] of nb, w (W_ij) and g (grad_i W_ij) for every
+    particle, ``counts[i]`` its partners; a row with counts[i] > cap is incomplete."""
     for i in prange(pos.shape[0]):
-        counts[i] = _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, 0, 1.0, dummy_i, dummy_i,
-                          dummy_f, dummy_g, False)
+        counts[i] = _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g)
 
 
 @njit(cache=True, parallel=True)
-def fill_pairs(pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, nb, w, g):
-    """Rows start[i]:start[i + 1] of nb, w (W_ij) and g (grad_i W_ij) for every particle."""
-    for i in prange(pos.shape[0]):
-        _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, nb, w, g, True)
-
-
-@njit(cache=True, parallel=True)
-def summed_density(rho, start, nb, w, m, w0, inv_sigma, wall_rho):
+def summed_density(rho, start, end, nb, w, m, w0, inv_sigma, wall_rho):
     """rho_i = (m_i W(0) + sum_j m_j W_ij) / sigma0 + wall_rho_i."""
     for i in prange(rho.shape[0]):
         s = m[i] * w0
-        for p in range(start[i], start[i + 1]):
+        for p in range(start[i], end[i]):
             s += m[nb[p]] * w[p]
         rho[i] = s * inv_sigma + wall_rho[i]
 
 
 @njit(cache=True, parallel=True)
-def diagonal(alpha, start, nb, g, m, rho, grad, rho0, inv_sigma):
+def diagonal(alpha, start, end, nb, g, m, rho, grad, rho0, inv_sigma):
     """alpha_i = 1 / D_i, D_i the change of particle i's density rate per unit of its own
     kappa (the Jacobi diagonal; Bender & Koschier 2017, Eq. 9, with the wall terms):
     D_i = [(S_i + 2 rho0 G_i) . (S_i / sigma0 + rho0 G_i) + sum_j m_i m_j |grad W_ij|^2 / sigma0] / rho_i,
@@ -198,7 +191,7 @@ def diagonal(alpha, start, nb, g, m, rho, grad, rho0, inv_sigma):
         s1 = 0.0
         s2 = 0.0
         sq = 0.0
-        for p in range(start[i], start[i + 1]):
+        for p in range(start[i], end[i]):
             mj = m[nb[p]]
             g0 = g[p, 0]
             g1 = g[p, 1]
@@ -217,14 +210,14 @@ def diagonal(alpha, start, nb, g, m, rho, grad, rho0, inv_sigma):
 
 
 @njit(cache=True, parallel=True)
-def density_rate(rate, start, nb, g, m, vel, grad, flux, rho0, inv_sigma):
+def density_rate(rate, start, end, nb, g, m, vel, grad, flux, rho0, inv_sigma):
     """rate_i = D rho_i / Dt = sum_j m_j (v_i - v_j) . grad_i W_ij / sigma0 + rho0 (v_i - v_w) . G_i,
     the walls' velocity as ``flux`` = sum over the wall groups of v_w . G (empty: walls at rest)."""
     dim = g.shape[1]
     moving = flux.shape[0] > 0
     for i in prange(rate.shape[0]):
         s = 0.0
-        for p in range(start[i], start[i + 1]):
+        for p in range(start[i], end[i]):
             j = nb[p]
             vg = 0.0
             for d in range(dim):
@@ -239,7 +232,7 @@ def density_rate(rate, start, nb, g, m, vel, grad, flux, rho0, inv_sigma):
 
 
 @njit(cache=True, parallel=True)
-def pressure_kick(vel, start, nb, g, m, rho, kappa, grad, rho0, dt):
+def pressure_kick(vel, start, end, nb, g, m, rho, kappa, grad, rho0, dt):
     """v_i -= dt [sum_j m_j (kappa_i / rho_i + kappa_j / rho_j) grad_i W_ij + 2 (kappa_i / rho_i) rho0 G_i]:
     the pressure acceleration of kappa = p / rho, the wall's part that of the particle's
     mirror image (pressure p_i, density rho0 over the wall's share of the support)."""
@@ -249,7 +242,7 @@ def pressure_kick(vel, start, nb, g, m, rho, kappa, grad, rho0, dt):
         a0 = 0.0
         a1 = 0.0
         a2 = 0.0
-        for p in range(start[i], start[i + 1]):
+        for p in range(start[i], end[i]):
             j = nb[p]
             c = m[j] * (ki + kappa[j] / rho[j])
             a0 += c * g[p, 0]
@@ -292,7 +285,7 @@ def projected_step(d, z, kappa, c_old, c_new):
 
 
 @njit(cache=True, parallel=True)
-def kernel_average(out, start, nb, w, m, rho, pos, kappa, gravity, w0):
+def kernel_average(out, start, end, nb, w, m, rho, pos, kappa, gravity, w0):
     """out_i = kernel average of kappa about its hydrostatic part: with q = kappa - g . x
     (constant in a fluid at rest, kappa = p / rho = |g| depth + const),
     out_i = g . x_i + sum_j V_j q_j W_ij / sum_j V_j W_ij over i's neighbours and itself
@@ -307,7 +300,7 @@ def kernel_average(out, start, nb, w, m, rho, pos, kappa, gravity, w0):
         vi = m[i] / rho[i] * w0
         num = vi * (kappa[i] - gxi)
         den = vi
-        for p in range(start[i], start[i + 1]):
+        for p in range(start[i], end[i]):
             j = nb[p]
             gxj = 0.0
             for d in range(dim):
