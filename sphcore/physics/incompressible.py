@@ -27,14 +27,12 @@ rho0 (v_i - v_w) . G_i.
 
 Each solve is projected Jacobi on kappa with the diagonal of Bender & Koschier (Eq. 9,
 the wall terms added; :func:`sphcore.physics.solvepairs.diagonal`), accelerated by
-Chebyshev polynomials on an interval of the diagonal-scaled operator's spectrum: plain
-Jacobi diverges, since that operator's largest eigenvalue exceeds 2 on the lattice
-(:func:`sphcore.physics.solvepairs.lattice_eigenvalue`), and weighted Jacobi damps the
-long waves too slowly to converge. A solve iterates until the mean error falls below the
-tolerance (density: |rho* - rho0| / rho0; divergence: dt |D rho| / rho0) after at least
-two (density) and one (divergence) iterations. kappa never falls below zero (the pressure
-pushes, never pulls): a particle at zero pressure that expands is at the free surface and
-counts no error.
+Chebyshev polynomials (:mod:`sphcore.physics.pressuresolve`). A solve iterates until the
+mean error falls below the tolerance (density: |rho* - rho0| / rho0; divergence:
+dt |D rho| / rho0) after at least two (density) and one (divergence) iterations. kappa
+never falls below zero (the pressure pushes, never pulls): a particle at zero pressure that
+expands is at the free surface and counts no error. The divergence solve leaves particles
+with a thin neighbourhood alone (``FULL_SHARE``).
 
 Warm start: each solve starts from the last step's kappa. The density solve's is first
 replaced by its kernel average about the hydrostatic part (kappa - g . x averaged, so that
@@ -55,23 +53,12 @@ import numpy as np
 
 from sphcore.errors import Instability
 from sphcore.jit.parallel import on_threads_by_size
+from sphcore.physics import pressuresolve
 from sphcore.physics import solvepairs as sp
 from sphcore.physics.forces import PressureField
 from sphcore.physics.integrators import SchemeBase
 from sphcore.physics.kernels import SUPPORT, kernel_w, lattice_nodes
 
-# the interval [low, high] lambda_max the Chebyshev acceleration is built for: above the
-# lattice's largest eigenvalue with room for particles off the lattice, and low enough for
-# the long waves a warm-started solve leaves (the 2D dam break's first 40 steps: 21.5
-# density iterations a step with 0.01, 26.5 with 0.03, 31.3 with 0.003; 0.1 and 0.0003 do
-# not converge within 400 at the first step; plain Jacobi weighted 1.2 / lambda_max did not
-# within 1000)
-CHEBYSHEV_LOW = 0.01
-CHEBYSHEV_HIGH = 1.3
-# a solve not converged after this many iterations restarts the recursion with the
-# interval's low end a quarter as high: what is left are waves longer than it was built for
-CHEBYSHEV_CYCLE = 40
-CHEBYSHEV_FLOOR = 0.0025  # at most two widenings: wider, the walls' modes grew (the still tank at h = 2 dx)
 # the divergence solve corrects only particles with at least this share of a full
 # neighbourhood (the lattice's neighbours; a wall counts with its share of the support):
 # a splash or surface particle with few partners has a near-zero diagonal, and a pair of
@@ -122,7 +109,7 @@ class DivergenceFree(SchemeBase):
         self.inv_sigma = 1.0 / self.sigma
         # the Chebyshev interval of the diagonal-scaled operator (module docstring)
         lam = sp.lattice_eigenvalue(prm.kernel_id, prm.h, prm.dx, prm.dim)
-        self.spectrum = (CHEBYSHEV_LOW * lam, CHEBYSHEV_HIGH * lam)
+        self.spectrum = pressuresolve.chebyshev_interval(lam)
         self.w0 = kernel_w(prm.kernel_id, 0.0, prm.h, prm.dim)
         self.full = self.sigma - prm.dx ** prm.dim * self.w0  # a full neighbourhood's sum_j V_j W_ij (self excluded)
         _, r = lattice_nodes(prm.h, prm.dx, prm.dim)
@@ -326,55 +313,10 @@ class DivergenceFree(SchemeBase):
         np.maximum(w, 0.0, out=w)
 
     def _solve(self, kappa, base, dt, tol, min_it, what, alpha=None):
-        """Chebyshev-accelerated, projected Jacobi iterations of one solve from the warm
-        start ``kappa`` (updated in place; Saad 2003, Algorithm 12.1, on the interval
-        ``self.spectrum`` of the diagonal-scaled operator): the velocities take the
-        pressure of the warm start, then of each step, until the mean error (of rho0) is
-        below ``tol``; ``alpha`` the Jacobi weights (the diagonal's inverse; 0 for a particle
-        the solve leaves alone). Returns (iterations, mean error)."""
-        st, prm = self.run.particles, self.ctx.params
-        alpha = self.alpha if alpha is None else alpha
-        rho0 = prm.rho0
-        self._pass(sp.pressure_kick, st.vel, self.start, self.end, self.nb, self.g, st.m, st.rho, kappa, self.grad,
-                   rho0, dt)
-        scale = 1.0 / (dt * dt)
-        lmin, lmax = self.spectrum
-        cycle = 0  # iterations since the recursion (re)started
-        n = max(st.n, 1)
-        d = self.step_d
-        it = 0
-        while True:
-            self._pass(sp.density_rate, self.rate, self.start, self.end, self.nb, self.g, st.m, st.vel, self.grad,
-                       self.flux, rho0, self.inv_sigma)
-            self._pass(sp.residual, self.dkappa, self.err, base, self.rate, dt, rho0, kappa, alpha, scale)
-            err = float(self.err.sum()) / (n * rho0)
-            if it >= min_it and err <= tol:
-                return it, err
-            if it >= self.max_iterations:
-                worst = int(np.argmax(self.err))
-                hint = "raise scheme.max_iterations or lower scheme.cfl"
-                if not self.forces.wants_walls:
-                    hint = "the walls carry no pressure: add wall_integral to plugins.use"
-                raise Instability(self.ctx.step, self.ctx.t, int(st.id[worst]),
-                                  f"the {what} solve did not converge in {self.max_iterations} iterations: mean error "
-                                  f"{err:.3g} of rho0 against scheme.{what}_tolerance = {tol:g} ({hint})")
-            if cycle == CHEBYSHEV_CYCLE:  # the long waves left: restart on a wider interval
-                lmin = max(0.25 * lmin, CHEBYSHEV_FLOOR * lmax / CHEBYSHEV_HIGH)
-                cycle = 0
-            if cycle == 0:
-                theta, delta = 0.5 * (lmax + lmin), 0.5 * (lmax - lmin)
-                sigma = theta / delta
-                rk = 1.0 / sigma
-                c_old, c_new = 0.0, 1.0 / theta
-            else:
-                rn = 1.0 / (2.0 * sigma - rk)
-                c_old, c_new = rn * rk, 2.0 * rn / delta
-                rk = rn
-            cycle += 1
-            self._pass(sp.projected_step, d, self.dkappa, kappa, c_old, c_new)
-            self._pass(sp.pressure_kick, st.vel, self.start, self.end, self.nb, self.g, st.m, st.rho, d, self.grad,
-                       rho0, dt)
-            it += 1
+        """One solve from the warm start ``kappa`` (:func:`sphcore.physics.pressuresolve.solve`);
+        ``alpha`` the Jacobi weights, the diagonal's inverse by default. Returns (iterations,
+        mean error)."""
+        return pressuresolve.solve(self, kappa, base, dt, tol, min_it, what, self.alpha if alpha is None else alpha)
 
     def _record(self, what, n_it, err):
         """The solves' figures in summary.json (under "dfsph"): iterations a step, the
