@@ -29,11 +29,12 @@ from sphcore.physics import solvepairs as sp
 
 # the interval [low, high] lambda_max the Chebyshev acceleration is built for: above the
 # lattice's largest eigenvalue with room for particles off the lattice, and low enough for
-# the long waves a warm-started solve leaves (the 2D dam break's first 40 steps: 21.5
-# density iterations a step with 0.01, 26.5 with 0.03, 31.3 with 0.003; 0.1 and 0.0003 do
-# not converge within 400 at the first step; plain Jacobi weighted 1.2 / lambda_max did not
-# within 1000)
-CHEBYSHEV_LOW = 0.01
+# the long waves a warm-started solve leaves. Density iterations a step over whole runs
+# (low 0.01 / 0.03 / 0.05 / 0.1): the 3D dam break at h = dx 10.1 / 6.4 / 5.6 / 5.0, with
+# 387 / 390 / 400 / 470 steps; the 2D seed dam break 6.4 / 4.4 (0.01 / 0.03), the fronts
+# within 0.5 % of each other. The first steps from the hydrostatic start need the long
+# waves: a solve not converged in CHEBYSHEV_CYCLE iterations widens the interval.
+CHEBYSHEV_LOW = 0.03
 CHEBYSHEV_HIGH = 1.3
 # a solve not converged after this many iterations restarts the recursion with the
 # interval's low end a quarter as high: what is left are waves longer than it was built for
