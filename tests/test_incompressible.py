@@ -26,7 +26,7 @@ def _pairs(pos, h, kid=WENDLAND, cap=4):
     counts = np.zeros(n, np.int64)
     while True:
         start = np.arange(n, dtype=np.int64) * cap
-        nb, w, g = np.zeros(n * cap, np.int64), np.zeros(n * cap), np.zeros((n * cap, dim))
+        nb, w, g = np.zeros(n * cap, np.int32), np.zeros(n * cap), np.zeros((n * cap, dim))
         sp.fill_pairs(pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g, counts)
         if counts.max() <= cap:
             return start, start + counts, nb, w, g
@@ -121,7 +121,7 @@ def test_the_operator_applied_to_a_wave_gives_the_symbol_s_eigenvalue(wave):
     k = np.pi * np.array(wave) / dx
     kappa = np.cos(pos @ k)
     vel = np.zeros((n, 2))
-    sp.pressure_kick(vel, start, end, nb, g, m, rho, kappa, grad, rho0, 1.0)
+    sp.pressure_kick(vel, start, end, nb, g, m, kappa / rho, grad, rho0, 1.0)
     rate, alpha = np.zeros(n), np.zeros(n)
     sp.density_rate(rate, start, end, nb, g, m, vel, grad, np.zeros(0), rho0, inv_sigma)
     sp.diagonal(alpha, start, end, nb, g, m, rho, grad, rho0, inv_sigma)

@@ -137,6 +137,7 @@ class DivergenceFree(SchemeBase):
         self.rate = np.zeros(n)
         self.dkappa = np.zeros(n)
         self.step_d = np.zeros(n)
+        self.kick_ratio = np.zeros(n)
         self.err = np.zeros(n)
         self.moved = np.zeros(n)
         self.kick = np.zeros((n, dim))
@@ -233,7 +234,7 @@ class DivergenceFree(SchemeBase):
         """Rows of ``cap`` pairs for ``n`` particles: particle i's from start[i] = i cap."""
         self.cap = cap
         self.start = np.arange(n, dtype=np.int64) * cap
-        self.nb = np.zeros(n * cap, np.int64)
+        self.nb = np.zeros(n * cap, np.int32)
         self.w = np.zeros(n * cap)
         self.g = np.zeros((n * cap, self.ctx.params.dim))
 

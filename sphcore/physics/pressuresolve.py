@@ -61,7 +61,9 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     error); a solve not converged in ``scheme.max_iterations`` raises Instability."""
     st, rho0 = scheme.run.particles, scheme.ctx.params.rho0
     rows = (scheme.start, scheme.end, scheme.nb, scheme.g)
-    _pass(sp.pressure_kick, st.vel, *rows, st.m, st.rho, kappa, scheme.grad, rho0, dt)
+    kr = scheme.kick_ratio  # kappa / rho of the kick, per particle (one division each, not one per pair)
+    np.divide(kappa, st.rho, out=kr)
+    _pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)
     scale = 1.0 / (dt * dt)
     lmin, lmax = scheme.spectrum
     cycle = 0  # iterations since the recursion (re)started
@@ -96,5 +98,6 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
             rk = rn
         cycle += 1
         _pass(sp.projected_step, d, z, kappa, c_old, c_new)
-        _pass(sp.pressure_kick, st.vel, *rows, st.m, st.rho, d, scheme.grad, rho0, dt)
+        np.divide(d, st.rho, out=kr)
+        _pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)
         it += 1

@@ -2,7 +2,7 @@
 
 The solves of a step sweep the same pairs a few to a few tens of times, so the pairs are
 listed once per step with what every pass reads of them: a full (both-ways) neighbour list
-in rows of a fixed capacity, particle i's partners ``nb[start[i]:end[i]]`` with
+in rows of a fixed capacity, particle i's partners ``nb[start[i]:end[i]]`` (int32) with
 ``start[i] = i cap``, and each pair's kernel value ``w`` = W_ij and gradient
 ``g`` = grad_i W_ij. Each pass is then a gather over the rows: particle i sums its own row,
 in the row's order, and writes only its own entry, so the passes run in parallel without
@@ -232,19 +232,19 @@ def density_rate(rate, start, end, nb, g, m, vel, grad, flux, rho0, inv_sigma):
 
 
 @njit(cache=True, parallel=True)
-def pressure_kick(vel, start, end, nb, g, m, rho, kappa, grad, rho0, dt):
-    """v_i -= dt [sum_j m_j (kappa_i / rho_i + kappa_j / rho_j) grad_i W_ij + 2 (kappa_i / rho_i) rho0 G_i]:
+def pressure_kick(vel, start, end, nb, g, m, kr, grad, rho0, dt):
+    """v_i -= dt [sum_j m_j (kr_i + kr_j) grad_i W_ij + 2 kr_i rho0 G_i], kr = kappa / rho:
     the pressure acceleration of kappa = p / rho, the wall's part that of the particle's
     mirror image (pressure p_i, density rho0 over the wall's share of the support)."""
     dim = g.shape[1]
     for i in prange(vel.shape[0]):
-        ki = kappa[i] / rho[i]
+        ki = kr[i]
         a0 = 0.0
         a1 = 0.0
         a2 = 0.0
         for p in range(start[i], end[i]):
             j = nb[p]
-            c = m[j] * (ki + kappa[j] / rho[j])
+            c = m[j] * (ki + kr[j])
             a0 += c * g[p, 0]
             a1 += c * g[p, 1]
             if dim == 3:
