@@ -27,7 +27,8 @@ def _pairs(pos, h, kid=WENDLAND, cap=4):
     while True:
         start = np.arange(n, dtype=np.int64) * cap
         nb, w, g = np.zeros(n * cap, np.int32), np.zeros(n * cap), np.zeros((n * cap, dim))
-        sp.fill_pairs(pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g, counts)
+        sp.fill_pairs(pos, np.zeros_like(pos), support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap,
+                      nb, w, g, counts)
         if counts.max() <= cap:
             return start, start + counts, nb, w, g
         cap = int(counts.max())

@@ -138,6 +138,7 @@ class DivergenceFree(SchemeBase):
         self.dkappa = np.zeros(n)
         self.step_d = np.zeros(n)
         self.kick_ratio = np.zeros(n)
+        self.spos = np.zeros((n, dim))
         self.err = np.zeros(n)
         self.moved = np.zeros(n)
         self.kick = np.zeros((n, dim))
@@ -255,8 +256,8 @@ class DivergenceFree(SchemeBase):
             raise Instability(self.ctx.step, self.ctx.t, -1, f"neighbour search failed: {e}") from None
         n = st.n
         while True:
-            self._pass(sp.fill_pairs, st.pos, support, self.cell, self.order, self.cell_start, nc0, nc1, nc2,
-                       prm.kernel_id, prm.h, self.start, self.cap, self.nb, self.w, self.g, self.counts)
+            self._pass(sp.fill_pairs, st.pos, self.spos, support, self.cell, self.order, self.cell_start, nc0, nc1,
+                       nc2, prm.kernel_id, prm.h, self.start, self.cap, self.nb, self.w, self.g, self.counts)
             most = int(self.counts.max()) if n else 0
             if most <= self.cap:
                 break

@@ -108,17 +108,24 @@ def bin_cells(pos, support, cell, order, cell_start):
 
 
 @njit(cache=True, inline="always")
-def _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g):
+def _walk(i, pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g):
     """Particle i's partners within the support, written from ``start[i]`` into nb, w, g
-    while the row's capacity ``cap`` lasts; returns their count (all of them)."""
+    while the row's capacity ``cap`` lasts; returns their count (all of them). The
+    candidates are read from ``spos``, the positions in cell order (``spos[k] =
+    pos[order[k]]``), three cells along the first axis at a time (one run of ``spos``)."""
     dim = pos.shape[1]
     r2max = support * support
+    x0 = pos[i, 0]
+    x1 = pos[i, 1]
+    x2 = pos[i, 2] if dim == 3 else 0.0
     c = cell[i]
     ci0 = c % nc0
     ci1 = (c // nc0) % nc1
     ci2 = c // (nc0 * nc1)
     lo2 = -1 if dim == 3 else 0
     hi2 = 1 if dim == 3 else 0
+    a0 = max(ci0 - 1, 0)
+    b0 = min(ci0 + 1, nc0 - 1)
     cnt = 0
     p = start[i]
     for o2 in range(lo2, hi2 + 1):
@@ -129,39 +136,45 @@ def _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start
             c1 = ci1 + o1
             if c1 < 0 or c1 >= nc1:
                 continue
-            for o0 in range(-1, 2):
-                c0 = ci0 + o0
-                if c0 < 0 or c0 >= nc0:
+            row = (c2 * nc1 + c1) * nc0
+            for k in range(cell_start[row + a0], cell_start[row + b0 + 1]):
+                d0 = x0 - spos[k, 0]
+                d1 = x1 - spos[k, 1]
+                r2 = d0 * d0 + d1 * d1
+                if dim == 3:
+                    d2 = x2 - spos[k, 2]
+                    r2 += d2 * d2
+                if r2 >= r2max:
                     continue
-                cc = (c2 * nc1 + c1) * nc0 + c0
-                for k in range(cell_start[cc], cell_start[cc + 1]):
-                    j = order[k]
-                    if j == i:
-                        continue
-                    r2 = 0.0
-                    for d in range(dim):
-                        x = pos[i, d] - pos[j, d]
-                        r2 += x * x
-                    if r2 >= r2max:
-                        continue
-                    if cnt < cap:
-                        r = math.sqrt(r2)
-                        nb[p] = j
-                        w[p] = kernel_w(kid, r, h, dim)
-                        f = kernel_f(kid, r, h, dim)
-                        for d in range(dim):
-                            g[p, d] = f * (pos[i, d] - pos[j, d])
-                        p += 1
-                    cnt += 1
+                j = order[k]
+                if j == i:
+                    continue
+                if cnt < cap:
+                    r = math.sqrt(r2)
+                    nb[p] = j
+                    w[p] = kernel_w(kid, r, h, dim)
+                    f = kernel_f(kid, r, h, dim)
+                    g[p, 0] = f * d0
+                    g[p, 1] = f * d1
+                    if dim == 3:
+                        g[p, 2] = f * d2
+                    p += 1
+                cnt += 1
     return cnt
 
 
 @njit(cache=True, parallel=True)
-def fill_pairs(pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g, counts):
+def fill_pairs(pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g, counts):
     """Rows start[i]:start[i] + counts[i] of nb, w (W_ij) and g (grad_i W_ij) for every
-    particle, ``counts[i]`` its partners; a row with counts[i] > cap is incomplete."""
-    for i in prange(pos.shape[0]):
-        counts[i] = _walk(i, pos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g)
+    particle, ``counts[i]`` its partners; a row with counts[i] > cap is incomplete.
+    ``spos``: the positions in cell order (filled here)."""
+    n = pos.shape[0]
+    for k in prange(n):
+        for d in range(pos.shape[1]):
+            spos[k, d] = pos[order[k], d]
+    for i in prange(n):
+        counts[i] = _walk(i, pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w,
+                          g)
 
 
 @njit(cache=True, parallel=True)
