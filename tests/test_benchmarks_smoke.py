@@ -154,6 +154,34 @@ def test_bench_pysph_against_pysph():
     figure(*rows(rf"1\s+({NUM})\s+({NUM})\s+({NUM})\s+(\d+)\s+(\d+)", out, 1)[0])  # times, ratio, steps
 
 
+
+SPLISH_VENV = Path("/tmp/splishsplash-venv")  # where the SPlisHSPlasH scripts keep SPlisHSPlasH by default
+
+
+def _splish_or_skip():
+    """Skip unless SPlisHSPlasH is installed in its own environment already (the scripts
+    would otherwise install it from PyPI, which a test does not do)."""
+    py = SPLISH_VENV / "bin" / "python"
+    if not py.exists() or subprocess.run([str(py), "-c", "import importlib.util as u, sys; "
+                                          "sys.exit(u.find_spec('pysplishsplash') is None)"]).returncode != 0:
+        pytest.skip(f"SPlisHSPlasH is not installed in {SPLISH_VENV} (the scripts install it there when run)")
+
+
+def test_bench_splishsplash_against_splishsplash():
+    _splish_or_skip()
+    out = output(script("speed/bench_splishsplash.py", "--pairs", 1, "--threads", 1, "--t-end", 0.01))
+    figure(*rows(rf"1\s+({NUM})\s+({NUM})\s+({NUM})\s+(\d+)\s+(\d+)\s+.*", out, 1)[0])  # times, ratio, steps
+
+
+def test_tank_at_rest_against_splishsplash_prints_displacements():
+    _splish_or_skip()
+    out = output(script("accuracy/tank_at_rest_splishsplash.py", "--t-end", 0.1, "--dx", 0.05))
+    assert rows(r"sphcore dfsph: (\d+) particles", out, 1) and rows(r"SPlisHSPlasH \S+ DFSPH: (\d+) particles", out, 1)
+    # each code's first frame: the start, nothing moved yet
+    for far, mean, speed in rows(rf"0\s+({NUM})\s+({NUM})\s+nan\s+nan\s+({NUM})", out, 2):
+        assert float(far) == float(mean) == 0.0 and float(speed) >= 0.0
+
+
 def test_bench_scale_prints_particle_steps_and_memory_per_particle():
     out = output(script("speed/bench_scale.py", "--sizes2d", 100, "--sizes3d", "--plugins", "reflective",
                         "--budget", 500))

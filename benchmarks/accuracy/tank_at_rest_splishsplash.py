@@ -1,0 +1,157 @@
+"""Water at rest with DFSPH, sphcore against SPlisHSPlasH: how far the particles move.
+
+    python benchmarks/accuracy/tank_at_rest_splishsplash.py [--t-end 5] [--dx 0.02] [--threads 1]
+
+A 3D cube of water 0.4 m deep in a box 0.4 m x 0.6 m x 0.4 m (y up), dx = 0.02 m, at rest
+from the start, both codes with their DFSPH and default tolerances (0.01 % density, 0.1 %
+divergence). sphcore runs a case written here (``[scheme] name = "dfsph"``, reflective
+walls with the wall model, 8,000 particles); SPlisHSPlasH 2.19.0 a scene written by
+:mod:`bench_splishsplash`'s rules (volume-map walls, its fluid 2 dx off the walls: 6,859
+particles), with particle ids exported once a second. Each code's positions are read by
+particle id every second; the script prints, per second, the largest and the mean
+displacement in dx since the start and since t = 1 s (after the first settling: a lattice
+block is not at its code's rest density), and the largest speed.
+
+SPlisHSPlasH is a benchmark tool here, installed by ``bench_splishsplash.py``'s rules into
+its own environment (``--splish-venv``). Figures are printed, never asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "speed"))
+
+from bench_splishsplash import BOX_OBJ, DRIVER, GAP, gldispatch, install, timed  # noqa: E402
+
+DEPTH, WIDTH, HEIGHT = 0.4, 0.4, 0.6  # m: water depth, tank width (x and z), tank height
+
+CASE = """[case]
+name = "tank_at_rest_3d"
+dim = 3
+
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [{w}, {h}, {w}]
+
+[[blocks]]
+min = [0.0, 0.0, 0.0]
+max = [{w}, {d}, {w}]
+
+[particles]
+dx = {dx}
+
+[fluid]
+rho0 = 1000.0
+nu = 1.0e-6
+
+[scheme]
+name = "dfsph"
+
+[time]
+t_end = {t_end}
+
+[plugins]
+use = ["reflective", "wall_integral", "netcdf"]
+
+[netcdf]
+every_dt = 1.0
+"""
+
+
+def splash_scene(folder: Path, dx: float, t_end: float) -> Path:
+    """SPlisHSPlasH's scene of the same tank: its fluid block GAP dx off the walls."""
+    (folder / "tank.obj").write_text(BOX_OBJ)
+    size = [WIDTH, HEIGHT, WIDTH]
+    first = GAP * dx
+    n = [round(DEPTH / dx - 2 * GAP) + 1, round(DEPTH / dx - GAP), round(DEPTH / dx - 2 * GAP) + 1]
+    config = {"particleRadius": dx / 2, "simulationMethod": 4, "gravitation": [0, -9.81, 0], "cflMethod": 1,
+              "cflFactor": 1.0, "cflMaxTimeStepSize": 0.005, "maxError": 0.01, "maxErrorV": 0.1,
+              "enableDivergenceSolver": True, "boundaryHandlingMethod": 2, "stopAt": t_end,
+              "enablePartioExport": False, "enableVTKExport": True, "dataExportFPS": 1,
+              "particleAttributes": "velocity;id", "enableZSort": False, "enableRigidBodyExport": False}
+    data = {"Configuration": config,
+            "Materials": [{"id": "Fluid", "density0": 1000, "viscosityMethod": 1,
+                           "Standard viscosity": {"viscosity": 0.01}}],
+            "RigidBodies": [{"geometryFile": "tank.obj", "translation": [0, 0, 0], "scale": size,
+                             "isDynamic": False, "isWall": True, "mapInvert": True, "mapThickness": 0.0,
+                             "mapResolution": [max(1, round(s / (2 * dx))) for s in size]}],
+            "FluidBlocks": [{"denseMode": 0, "start": [first - dx] * 3,
+                             "end": [first + k * dx for k in n]}]}
+    path = folder / "scene.json"
+    path.write_text(json.dumps(data, indent=1))
+    return path
+
+
+def splash_frames(out: Path) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(positions, velocities) sorted by particle id, one per exported second."""
+    import meshio
+
+    files = sorted((out / "vtk").glob("ParticleData_Fluid_*.vtk"), key=lambda f: int(f.stem.rsplit("_", 1)[1]))
+    frames = []
+    for f in files:
+        m = meshio.read(f)
+        order = np.argsort(m.point_data["id"].astype(np.int64).ravel())
+        frames.append((np.asarray(m.points)[order], np.asarray(m.point_data["velocity"])[order]))
+    return frames
+
+
+def sph_frames(out: Path) -> list[tuple[np.ndarray, np.ndarray]]:
+    import xarray as xr
+
+    with xr.open_dataset(out / "particles.nc") as ds:  # particles sorted by id
+        return [(ds["position"].values[k], ds["velocity"].values[k]) for k in range(ds.sizes["time"])]
+
+
+def report(name: str, frames, dx: float) -> None:
+    p0, p1 = frames[0][0], frames[min(1, len(frames) - 1)][0]
+    print(f"{name}: {p0.shape[0]} particles")
+    print(f"{'t s':>4} {'max from 0':>11} {'mean from 0':>12} {'max from 1 s':>13} {'mean from 1 s':>14} {'|v| max m/s':>12}")
+    for k, (p, v) in enumerate(frames):
+        d0, d1 = np.linalg.norm(p - p0, axis=1) / dx, np.linalg.norm(p - p1, axis=1) / dx
+        late = k >= 1
+        print(f"{k:>4} {d0.max():11.3f} {d0.mean():12.4f} {d1.max() if late else float('nan'):13.3f} "
+              f"{d1.mean() if late else float('nan'):14.4f} {np.linalg.norm(v, axis=1).max():12.3e}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--t-end", type=float, default=5.0)
+    ap.add_argument("--dx", type=float, default=0.02)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--splish-venv", type=Path, default=Path("/tmp/splishsplash-venv"))
+    ap.add_argument("--splish-version", default="2.19.0")
+    ap.add_argument("--gldispatch", help="path of libGLdispatch.so.0 (default: searched)")
+    a = ap.parse_args(argv)
+    splash_env = dict(os.environ, LD_PRELOAD=gldispatch(a.gldispatch), OMP_NUM_THREADS=str(a.threads))
+    py = install(a.splish_venv, a.splish_version, splash_env)
+    with tempfile.TemporaryDirectory(prefix="tank_at_rest") as tmp:
+        tmp = Path(tmp)
+        case = tmp / "case"
+        case.mkdir()
+        (case / "case.toml").write_text(CASE.format(w=WIDTH, h=HEIGHT, d=DEPTH, dx=a.dx, t_end=a.t_end))
+        env = dict(os.environ, NUMBA_NUM_THREADS=str(a.threads))
+        timed([sys.executable, "-m", "sphcore.cli", "run", str(case), "--output", str(tmp / "sph"), "--progress",
+               "off"], env, tmp)
+        splash = tmp / "splash"
+        splash.mkdir()
+        scene = splash_scene(splash, a.dx, a.t_end)
+        timed([str(py), "-c", DRIVER, "--no-gui", "--no-initial-pause", "--output-dir", str(splash / "out"),
+               "--stopAt", repr(a.t_end), str(scene)], splash_env, tmp)
+        print(f"water at rest, {DEPTH} m deep, dx = {a.dx} m, {a.t_end:g} s; displacements in dx")
+        report("sphcore dfsph", sph_frames(tmp / "sph"), a.dx)
+        report(f"SPlisHSPlasH {a.splish_version} DFSPH", splash_frames(splash / "out"), a.dx)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
