@@ -52,7 +52,6 @@ from __future__ import annotations
 import numpy as np
 
 from sphcore.errors import Instability
-from sphcore.jit.parallel import on_threads_by_size
 from sphcore.physics import pressuresolve
 from sphcore.physics import solvepairs as sp
 from sphcore.physics.forces import PressureField
@@ -134,6 +133,7 @@ class DivergenceFree(SchemeBase):
         self.alpha = np.zeros(n)
         self.alpha_v = np.zeros(n)
         self.partners = np.zeros(n)
+        self.thick = np.zeros(n, bool)  # a neighbourhood full enough for the divergence solve
         self.rate = np.zeros(n)
         self.dkappa = np.zeros(n)
         self.step_d = np.zeros(n)
@@ -198,8 +198,8 @@ class DivergenceFree(SchemeBase):
         st.vel += self.kick
         kept = self.run.kept[KEPT]
         smooth = self.dkappa  # scratch until the iterations
-        self._pass(sp.kernel_average, smooth, self.start, self.end, self.nb, self.w, st.m, st.rho, st.pos,
-                   kept["kappa"], self.ctx.params.gravity, self.w0)
+        sp.run_pass(sp.kernel_average, smooth, self.start, self.end, self.nb, self.w, st.m, st.rho, st.pos,
+                    kept["kappa"], self.ctx.params.gravity, self.w0)
         np.maximum(smooth, 0.0, out=kept["kappa"])
         n_it, err = self._solve(kept["kappa"], st.rho, dt, self.tol_density, 2, "density")
         self._record("density", n_it, err)
@@ -217,11 +217,11 @@ class DivergenceFree(SchemeBase):
         self._list_pairs(lambda: wall)
         kept = self.run.kept[KEPT]
         # the partners, a wall counted by its share: full neighbourhoods take part (FULL_SHARE)
-        np.copyto(self.partners, self.counts, casting="unsafe")
-        self.partners += kept["wall_rho"] * (self.n_full / self.ctx.params.rho0)
-        full = self.partners >= FULL_SHARE * self.n_full
-        np.multiply(self.alpha, full, out=self.alpha_v)
-        kept["kappa_v"] *= full
+        np.multiply(kept["wall_rho"], self.n_full / self.ctx.params.rho0, out=self.partners)
+        self.partners += self.counts
+        np.greater_equal(self.partners, FULL_SHARE * self.n_full, out=self.thick)
+        np.multiply(self.alpha, self.thick, out=self.alpha_v)
+        np.multiply(kept["kappa_v"], self.thick, out=kept["kappa_v"])
         n_it, err = self._solve(kept["kappa_v"], self.rho0_base, dt, self.tol_divergence, 1, "divergence",
                                 self.alpha_v)
         self._record("divergence", n_it, err)
@@ -239,9 +239,6 @@ class DivergenceFree(SchemeBase):
         self.w = np.zeros(n * cap)
         self.g = np.zeros((n * cap, self.ctx.params.dim))
 
-    def _pass(self, kernel, *args):
-        on_threads_by_size(args[0].shape[0], sp.LIST_PARALLEL_MIN, kernel, *args)
-
     def _list_pairs(self, wall_terms):
         """The pairs, the summed density (into ``state.rho``), the diagonal and the
         walls' terms of the current positions; nothing when they were listed there."""
@@ -256,18 +253,18 @@ class DivergenceFree(SchemeBase):
             raise Instability(self.ctx.step, self.ctx.t, -1, f"neighbour search failed: {e}") from None
         n = st.n
         while True:
-            self._pass(sp.fill_pairs, st.pos, self.spos, support, self.cell, self.order, self.cell_start, nc0, nc1,
-                       nc2, prm.kernel_id, prm.h, self.start, self.cap, self.nb, self.w, self.g, self.counts)
+            sp.run_pass(sp.fill_pairs, st.pos, self.spos, support, self.cell, self.order, self.cell_start, nc0, nc1,
+                        nc2, prm.kernel_id, prm.h, self.start, self.cap, self.nb, self.w, self.g, self.counts)
             most = int(self.counts.max()) if n else 0
             if most <= self.cap:
                 break
             self._rows(n, most + most // 4)  # a row overflowed: larger rows, the walk again
         np.add(self.start, self.counts, out=self.end)
         self._walls(wall_terms())
-        self._pass(sp.summed_density, st.rho, self.start, self.end, self.nb, self.w, st.m, self.w0, self.inv_sigma,
-                   self.run.kept[KEPT]["wall_rho"])
-        self._pass(sp.diagonal, self.alpha, self.start, self.end, self.nb, self.g, st.m, st.rho, self.grad, prm.rho0,
-                   self.inv_sigma)
+        sp.run_pass(sp.summed_density, st.rho, self.start, self.end, self.nb, self.w, st.m, self.w0, self.inv_sigma,
+                    self.run.kept[KEPT]["wall_rho"])
+        sp.run_pass(sp.diagonal, self.alpha, self.start, self.end, self.nb, self.g, st.m, st.rho, self.grad, prm.rho0,
+                    self.inv_sigma)
         self._listed = (st.pos.copy(), st.id.copy())
         self.ctx.counters["dfsph_pair_lists"] += 1
 

@@ -24,7 +24,6 @@ from __future__ import annotations
 import numpy as np
 
 from sphcore.errors import Instability
-from sphcore.jit.parallel import on_threads_by_size
 from sphcore.physics import solvepairs as sp
 
 # the interval [low, high] lambda_max the Chebyshev acceleration is built for: above the
@@ -47,10 +46,6 @@ def chebyshev_interval(lam: float) -> tuple[float, float]:
     return CHEBYSHEV_LOW * lam, CHEBYSHEV_HIGH * lam
 
 
-def _pass(kernel, *args):
-    on_threads_by_size(args[0].shape[0], sp.LIST_PARALLEL_MIN, kernel, *args)
-
-
 def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     """Iterate one solve of ``scheme`` (a :class:`sphcore.physics.incompressible.DivergenceFree`,
     whose pair list, wall terms and scratch arrays it uses) from the warm start ``kappa``
@@ -63,7 +58,7 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     rows = (scheme.start, scheme.end, scheme.nb, scheme.g)
     kr = scheme.kick_ratio  # kappa / rho of the kick, per particle (one division each, not one per pair)
     np.divide(kappa, st.rho, out=kr)
-    _pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)
+    sp.run_pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)
     scale = 1.0 / (dt * dt)
     lmin, lmax = scheme.spectrum
     cycle = 0  # iterations since the recursion (re)started
@@ -71,8 +66,8 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     d, z, err_i = scheme.step_d, scheme.dkappa, scheme.err
     it = 0
     while True:
-        _pass(sp.density_rate, scheme.rate, *rows, st.m, st.vel, scheme.grad, scheme.flux, rho0, scheme.inv_sigma)
-        _pass(sp.residual, z, err_i, base, scheme.rate, dt, rho0, kappa, alpha, scale)
+        sp.run_pass(sp.density_rate, scheme.rate, *rows, st.m, st.vel, scheme.grad, scheme.flux, rho0, scheme.inv_sigma)
+        sp.run_pass(sp.residual, z, err_i, base, scheme.rate, dt, rho0, kappa, alpha, scale)
         err = float(err_i.sum()) / (n * rho0)
         if it >= min_it and err <= tol:
             return it, err
@@ -97,7 +92,7 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
             c_old, c_new = rn * rk, 2.0 * rn / delta
             rk = rn
         cycle += 1
-        _pass(sp.projected_step, d, z, kappa, c_old, c_new)
+        sp.run_pass(sp.projected_step, d, z, kappa, c_old, c_new)
         np.divide(d, st.rho, out=kr)
-        _pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)
+        sp.run_pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)
         it += 1

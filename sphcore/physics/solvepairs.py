@@ -28,9 +28,16 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from sphcore.jit.parallel import on_threads_by_size
 from sphcore.physics.kernels import SUPPORT, kernel_f, kernel_w, lattice_nodes
 
 LIST_PARALLEL_MIN = 1000  # particles: the passes run on one thread below (a launch costs more)
+
+
+def run_pass(kernel, *args):
+    """Call one of this module's passes, on one thread below LIST_PARALLEL_MIN entries of
+    its first argument (the output: one entry per particle)."""
+    on_threads_by_size(args[0].shape[0], LIST_PARALLEL_MIN, kernel, *args)
 
 
 def lattice_sum(kernel_id: int, h: float, dx: float, dim: int) -> float:
