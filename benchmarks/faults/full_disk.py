@@ -9,7 +9,7 @@ with the uninterrupted run's end state, bit for bit. Needs root (mount); Linux o
 FREE in KiB. Prints one line per fill level and ``N fill levels, K failed``; exit 1 if any
 failed. Where no tmpfs can be mounted (not root, not Linux, no permission) it says so in
 one line and exits with status 77 (UNAVAILABLE). The suite injects ENOSPC at each write
-point instead (tests/test_run_survival.py).
+point instead (tests/test_full_disk.py).
 """
 
 from __future__ import annotations
