@@ -32,7 +32,15 @@ from pathlib import Path
 import numpy as np
 
 from sphcore.api import OutputError, ScheduledWriter, hookimpl, leading_complete, rotation_vector, write_atomically
-from sphcore_plugins.netcdf import case_attributes, drop_cut, header_cut, new_dataset, output_error, rewrite_first, series_on_disk
+from sphcore_plugins.netcdf import (
+    case_attributes,
+    drop_cut,
+    header_cut,
+    new_dataset,
+    output_error,
+    rewrite_first,
+    series_on_disk,
+)
 
 TABLE = "wall_loads"
 FILE_NAME = "wall_loads.nc"

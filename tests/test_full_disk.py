@@ -15,10 +15,15 @@ import pytest
 import xarray as xr
 from conftest import write_case
 from test_run_lifecycle import MINI_DAM, checkpoint_by_id, stray_files
-from test_run_survival import CKPT, assert_same_as_reference, cli_main
-from test_run_survival import dam  # noqa: F401  (the fixture: the mini dam break and its uninterrupted run)
+from test_run_survival import CKPT, assert_same_as_reference, cli_main, mini_dam_and_reference
 
 from sphcore.testing import case_with
+
+
+@pytest.fixture(scope="module")
+def dam(tmp_path_factory):
+    """The mini dam break and its uninterrupted run (test_run_survival.mini_dam_and_reference)."""
+    return mini_dam_and_reference(tmp_path_factory.mktemp("full_disk"))
 
 
 def _enospc(path=""):

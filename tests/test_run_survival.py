@@ -51,14 +51,19 @@ def cli_main(capsys, *argv) -> tuple[int, str, str]:
 CKPT = ["--set", "output.checkpoint_every_dt=0.02"]
 
 
-@pytest.fixture(scope="module")
-def dam(tmp_path_factory):
-    """The mini dam break of test_run_lifecycle and its uninterrupted run (in this process)."""
-    root = tmp_path_factory.mktemp("survival")
+def mini_dam_and_reference(root: Path) -> tuple[Path, Path]:
+    """The mini dam break of test_run_lifecycle written under ``root`` and its uninterrupted
+    run (in this process): (case folder, run folder)."""
     case_dir = write_case(root / "mini_dam", MINI_DAM)
     ref = root / "ref"
     assert cli.main(["run", str(case_dir), "--output", str(ref), "--progress", "off", *CKPT]) == 0
     return case_dir, ref
+
+
+@pytest.fixture(scope="module")
+def dam(tmp_path_factory):
+    """The mini dam break and its uninterrupted run (:func:`mini_dam_and_reference`)."""
+    return mini_dam_and_reference(tmp_path_factory.mktemp("survival"))
 
 
 def assert_same_as_reference(out: Path, ref: Path):

@@ -21,7 +21,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sphcore.api import leading_complete, write_atomically
-from sphcore_plugins.netcdf import case_attributes, drop_cut, header_cut, new_dataset, output_error, rewrite_first, series_on_disk
+from sphcore_plugins.netcdf import (
+    case_attributes,
+    drop_cut,
+    header_cut,
+    new_dataset,
+    output_error,
+    rewrite_first,
+    series_on_disk,
+)
 
 if TYPE_CHECKING:  # imported where a file is opened: a run that writes none does not pay for it
     import netCDF4
