@@ -182,6 +182,17 @@ def test_tank_at_rest_against_splishsplash_prints_displacements():
         assert float(far) == float(mean) == 0.0 and float(speed) >= 0.0
 
 
+def test_tank_at_rest_alone_prints_displacements_by_region():
+    out = output(script("accuracy/tank_at_rest_splishsplash.py", "--t-end", 0.1, "--dx", 0.05, "--sphcore-only",
+                        "--set", "reflective.cr=0"))
+    assert "SPlisHSPlasH" not in out and "sphcore's overrides: reflective.cr=0" in out
+    (n,), = rows(r"sphcore dfsph: (\d+) particles", out, 1)
+    found = {name: (int(k), float(mean), float(far)) for name, k, mean, far, _ in
+             rows(rf"\s*(side|edge|floor|top|interior)\s+(\d+)\s+({NUM})\s+({NUM})\s+({NUM})", out, 5)}
+    assert sum(k for k, _, _ in found.values()) == int(n)  # every particle in one region
+    assert all(0.0 <= mean <= far for _, mean, far in found.values())
+
+
 def test_bench_scale_prints_particle_steps_and_memory_per_particle():
     out = output(script("speed/bench_scale.py", "--sizes2d", 100, "--sizes3d", "--plugins", "reflective",
                         "--budget", 500))

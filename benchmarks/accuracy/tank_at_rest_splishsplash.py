@@ -1,6 +1,7 @@
 """Water at rest with DFSPH, sphcore against SPlisHSPlasH: how far the particles move.
 
     python benchmarks/accuracy/tank_at_rest_splishsplash.py [--t-end 5] [--dx 0.02] [--threads 1]
+        [--set SECTION.KEY=VALUE ...] [--sphcore-only]
 
 A 3D cube of water 0.4 m deep in a box 0.4 m x 0.6 m x 0.4 m (y up), dx = 0.02 m, at rest
 from the start, both codes with their DFSPH and default tolerances (0.01 % density, 0.1 %
@@ -10,7 +11,15 @@ walls with the wall model, 8,000 particles); SPlisHSPlasH 2.19.0 a scene written
 particles), with particle ids exported once a second. Each code's positions are read by
 particle id every second; the script prints, per second, the largest and the mean
 displacement in dx since the start and since t = 1 s (after the first settling: a lattice
-block is not at its code's rest density), and the largest speed.
+block is not at its code's rest density), and the largest speed; then, at the last frame,
+where the particles moved: the mean and largest displacement and the mean vertical one of
+the particles that started in the first layer along the side walls, along the vertical
+edges (two side walls), on the floor, in the top layer and in the interior.
+
+``--set`` passes case overrides to sphcore's run (``reflective.cr=0``,
+``particles.radius=0.005``, ``scheme.density_tolerance=1e-5``, ``'domain.max=[0.4,0.4,0.4]'``
+for a closed box full of water, ...), and ``--sphcore-only`` leaves SPlisHSPlasH out (no
+install needed).
 
 SPlisHSPlasH is a benchmark tool here, installed by ``bench_splishsplash.py``'s rules into
 its own environment (``--splish-venv``). Figures are printed, never asserted.
@@ -122,6 +131,27 @@ def report(name: str, frames, dx: float) -> None:
               f"{d1.mean() if late else float('nan'):14.4f} {np.linalg.norm(v, axis=1).max():12.3e}")
 
 
+def regions(p0: np.ndarray, dx: float) -> dict[str, np.ndarray]:
+    """Masks of the particles by where they started, against the block's first frame: within
+    dx of one side wall (x or z; "side"), of two ("edge"), of the floor, of the top, or none."""
+    lo, hi = p0.min(axis=0), p0.max(axis=0)
+    near = [(p0[:, k] - lo[k] < dx) | (hi[k] - p0[:, k] < dx) for k in range(3)]
+    sides = near[0].astype(int) + near[2]
+    floor, top = p0[:, 1] - lo[1] < dx, hi[1] - p0[:, 1] < dx
+    return {"side": (sides == 1) & ~top & ~floor, "edge": (sides == 2) & ~top & ~floor, "floor": floor & ~top,
+            "top": top, "interior": (sides == 0) & ~top & ~floor}
+
+
+def report_regions(frames, dx: float) -> None:
+    p0, p = frames[0][0], frames[-1][0]
+    d = np.linalg.norm(p - p0, axis=1) / dx
+    dy = (p[:, 1] - p0[:, 1]) / dx
+    print(f"{'region':>9} {'particles':>10} {'mean':>8} {'max':>8} {'mean dy':>8}  (at the last frame, in dx)")
+    for name, m in regions(p0, dx).items():
+        if m.any():
+            print(f"{name:>9} {int(m.sum()):10d} {d[m].mean():8.3f} {d[m].max():8.3f} {dy[m].mean():+8.3f}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--t-end", type=float, default=5.0)
@@ -130,25 +160,39 @@ def main(argv=None) -> int:
     ap.add_argument("--splish-venv", type=Path, default=Path("/tmp/splishsplash-venv"))
     ap.add_argument("--splish-version", default="2.19.0")
     ap.add_argument("--gldispatch", help="path of libGLdispatch.so.0 (default: searched)")
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                    help="a case override for sphcore's run (repeatable)")
+    ap.add_argument("--sphcore-only", action="store_true", help="run sphcore alone (SPlisHSPlasH not installed)")
     a = ap.parse_args(argv)
-    splash_env = dict(os.environ, LD_PRELOAD=gldispatch(a.gldispatch), OMP_NUM_THREADS=str(a.threads))
-    py = install(a.splish_venv, a.splish_version, splash_env)
+    py = splash_env = None
+    if not a.sphcore_only:
+        splash_env = dict(os.environ, LD_PRELOAD=gldispatch(a.gldispatch), OMP_NUM_THREADS=str(a.threads))
+        py = install(a.splish_venv, a.splish_version, splash_env)
     with tempfile.TemporaryDirectory(prefix="tank_at_rest") as tmp:
         tmp = Path(tmp)
         case = tmp / "case"
         case.mkdir()
         (case / "case.toml").write_text(CASE.format(w=WIDTH, h=HEIGHT, d=DEPTH, dx=a.dx, t_end=a.t_end))
         env = dict(os.environ, NUMBA_NUM_THREADS=str(a.threads))
+        sets = [x for o in a.overrides for x in ("--set", o)]
         timed([sys.executable, "-m", "sphcore.cli", "run", str(case), "--output", str(tmp / "sph"), "--progress",
-               "off"], env, tmp)
+               "off", *sets], env, tmp)
+        print(f"water at rest, {DEPTH} m deep, dx = {a.dx} m, {a.t_end:g} s; displacements in dx")
+        if a.overrides:
+            print("sphcore's overrides: " + " ".join(a.overrides))
+        frames = sph_frames(tmp / "sph")
+        report("sphcore dfsph", frames, a.dx)
+        report_regions(frames, a.dx)
+        if py is None:
+            return 0
         splash = tmp / "splash"
         splash.mkdir()
         scene = splash_scene(splash, a.dx, a.t_end)
         timed([str(py), "-c", DRIVER, "--no-gui", "--no-initial-pause", "--output-dir", str(splash / "out"),
                "--stopAt", repr(a.t_end), str(scene)], splash_env, tmp)
-        print(f"water at rest, {DEPTH} m deep, dx = {a.dx} m, {a.t_end:g} s; displacements in dx")
-        report("sphcore dfsph", sph_frames(tmp / "sph"), a.dx)
-        report(f"SPlisHSPlasH {a.splish_version} DFSPH", splash_frames(splash / "out"), a.dx)
+        frames = splash_frames(splash / "out")
+        report(f"SPlisHSPlasH {a.splish_version} DFSPH", frames, a.dx)
+        report_regions(frames, a.dx)
     return 0
 
 
