@@ -106,6 +106,35 @@ def test_the_operator_s_largest_eigenvalue_exceeds_two_so_plain_jacobi_diverges(
     assert lam > 2.0
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_solves_operator_is_symmetric_next_to_a_wall(dim):
+    # kappa / rho -> the density rate after its pressure kick (dt = 1, from rest), particles
+    # off a lattice next to the wall x = 0 with the walls' gradient G: the matrix is symmetric
+    # (the kick is the rate's adjoint, so that the Chebyshev-accelerated Jacobi iterates on
+    # a real spectrum), and its diagonal is the Jacobi weight's (less the added 2 (rho0 G)^2)
+    dx, h, rho0 = 1.0, 1.3, 1000.0
+    rng = np.random.default_rng(11)
+    pos = _lattice((6, 7) if dim == 2 else (4, 4, 4), dx) + rng.uniform(-0.2, 0.2, (42 if dim == 2 else 64, dim))
+    start, end, nb, w, g = _pairs(pos, h)
+    n = pos.shape[0]
+    m = np.full(n, rho0 * dx ** dim)
+    rho = rho0 * (1.0 + rng.uniform(-0.01, 0.01, n))
+    inv_sigma = 1.0 / sp.lattice_sum(WENDLAND, h, dx, dim)
+    grad = np.zeros((n, dim))
+    grad[:, 0] = -np.clip(SUPPORT * h - pos[:, 0], 0.0, None) ** 2 / (SUPPORT * h) ** 3  # the wall's share rises to x = 0
+    a = np.zeros((n, n))
+    for k in range(n):
+        vel = np.zeros((n, dim))
+        sp.pressure_kick(vel, start, end, nb, g, m, np.eye(n)[k], grad, rho0, 1.0)
+        sp.density_rate(a[:, k], start, end, nb, g, m, vel, grad, np.zeros(0), rho0, inv_sigma)
+    assert np.abs(grad[:, 0]).max() > 0.1 and np.abs(a).max() > 0.0
+    np.testing.assert_allclose(a, a.T, rtol=0, atol=1e-12 * np.abs(a).max())
+    alpha = np.zeros(n)
+    sp.diagonal(alpha, start, end, nb, g, m, rho, grad, rho0, inv_sigma)
+    wall = 2.0 * rho0 ** 2 * (grad * grad).sum(axis=1)
+    np.testing.assert_allclose(1.0 / alpha, (-np.diag(a) + wall) / rho, rtol=1e-12)
+
+
 @pytest.mark.parametrize("wave", [(0.3, 0.35), (0.18, 0.23), (0.5, 0.0)])
 def test_the_operator_applied_to_a_wave_gives_the_symbol_s_eigenvalue(wave):
     # kappa = cos(k . x) on a lattice: the pressure kick of kappa (dt = 1, from rest) then the

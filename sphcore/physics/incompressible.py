@@ -22,8 +22,15 @@ support (G the share's gradient from the wall model, :class:`sphcore.physics.equ
 The density is the kernel sum plus the walls' part, rho_i = sum_j m_j W_ij / sigma0 +
 rho0 s_i, sigma0 the kernel sum of the initial lattice and s_i the walls' share measured
 against that lattice (the wall model's ``fill``), so that the initial lattice is at rho0
-exactly, next to walls too. Its rate is D rho_i = sum_j m_j v_ij . grad W_ij / sigma0 +
-rho0 (v_i - v_w) . G_i.
+exactly, next to walls too. Its rate is D rho_i = [sum_j m_j v_ij . grad W_ij +
+2 rho0 (v_i - v_w) . G_i] / sigma0: the walls' part is the mirror image's, which comes
+towards the particle at twice its normal velocity, as the wall's force is the image's
+(twice the particle's own pressure). With the same factor 2 in the rate as in the force, the
+pressure kick is the density rate's adjoint and each solve's operator is symmetric
+(``tests/test_incompressible.py``). With the factor 1 of the walls' share alone, the
+operator was not: the wall terms then drive a circulation in water at rest (down the side
+walls, up the middle) that grew through 5 s, 9.9 dx against 1.9 dx symmetric
+(``benchmarks/accuracy/tank_at_rest_splishsplash.py``).
 
 Each solve is projected Jacobi on kappa with the diagonal of Bender & Koschier (Eq. 9,
 the wall terms added; :func:`sphcore.physics.solvepairs.diagonal`), accelerated by
@@ -292,8 +299,9 @@ class DivergenceFree(SchemeBase):
 
     def _move_walls_density(self, wall, dt):
         """The walls' part of the density follows the step's displacement as the walls
-        corrected it: rho0 (G_n + G_n+1) / 2 . (x_n+1 - x_n), minus rho0 dt v_w . G for
-        walls that move, the rate the density solve predicted with. Taken from the
+        corrected it: 2 rho0 (G_n + G_n+1) / 2 . (x_n+1 - x_n) / sigma0, minus
+        2 rho0 dt v_w . G / sigma0 for walls that move, the rate the density solve predicted
+        with (the mirror image's, module docstring). Taken from the
         positions alone (rho0 s(x)), it would differ from the prediction by the lattice
         error of the wall gradient, which the solves then meet again every step
         (measured: the floor's layer of the 2D dam break crept 0.3 % above rho0 in 300
@@ -304,10 +312,10 @@ class DivergenceFree(SchemeBase):
         self.grad_start *= 0.5
         np.subtract(st.pos, self.pos0, out=self.kick)
         np.einsum("ij,ij->i", self.grad_start, self.kick, out=self.moved)
-        self.moved *= rho0
+        self.moved *= 2.0 * rho0 * self.inv_sigma
         w += self.moved
         if wall.flux.shape[0] == st.n:
-            w -= rho0 * dt * wall.flux
+            w -= 2.0 * rho0 * self.inv_sigma * dt * wall.flux
         w[wall.share <= 0.0] = 0.0
         np.maximum(w, 0.0, out=w)
 

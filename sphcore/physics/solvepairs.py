@@ -198,13 +198,14 @@ def summed_density(rho, start, end, nb, w, m, w0, inv_sigma, wall_rho):
 def diagonal(alpha, start, end, nb, g, m, rho, grad, rho0, inv_sigma):
     """alpha_i = 1 / D_i, D_i the change of particle i's density rate per unit of its own
     kappa (the Jacobi diagonal; Bender & Koschier 2017, Eq. 9, with the wall terms):
-    D_i = [(S_i + 2 rho0 G_i) . (S_i / sigma0 + rho0 G_i) + sum_j m_i m_j |grad W_ij|^2 / sigma0] / rho_i,
+    D_i = [|S_i + 2 rho0 G_i|^2 + sum_j m_i m_j |grad W_ij|^2] / (sigma0 rho_i),
     S_i = sum_j m_j grad_i W_ij; 0 where D_i vanishes (a particle alone).
 
-    Next to a wall the first product nearly vanishes (S_i ~ -rho0 G_i), but the wall's push
-    on i (twice the mirror's) changes its neighbours' densities, which the diagonal does not
-    see: with this D alone a mode along the side walls under the free surface grew by 3 % an
-    iteration (the still tank at h = 2 dx). Its magnitude 2 (rho0 |G_i|)^2 is added."""
+    Next to a wall the first term is about (rho0 |G_i|)^2 (S_i ~ -rho0 G_i), and the wall's
+    push on i changes its neighbours' densities, which the diagonal does not see:
+    without more, a mode along the side walls under the free surface grew by 3 % an iteration
+    (the still tank at h = 2 dx, before the rate's wall term was made the kick's adjoint).
+    2 (rho0 |G_i|)^2 / rho_i is added: the weight stays below the exact diagonal's inverse."""
     dim = g.shape[1]
     for i in prange(alpha.shape[0]):
         s0 = 0.0
@@ -223,15 +224,15 @@ def diagonal(alpha, start, end, nb, g, m, rho, grad, rho0, inv_sigma):
         w0 = rho0 * grad[i, 0]
         w1 = rho0 * grad[i, 1]
         w2 = rho0 * grad[i, 2] if dim == 3 else 0.0
-        cross = (s0 + 2.0 * w0) * (s0 * inv_sigma + w0) + (s1 + 2.0 * w1) * (s1 * inv_sigma + w1) \
-            + (s2 + 2.0 * w2) * (s2 * inv_sigma + w2)
-        d = (max(cross, 0.0) + 2.0 * (w0 * w0 + w1 * w1 + w2 * w2) + m[i] * sq * inv_sigma) / rho[i]
+        cross = ((s0 + 2.0 * w0) ** 2 + (s1 + 2.0 * w1) ** 2 + (s2 + 2.0 * w2) ** 2) * inv_sigma
+        d = (cross + 2.0 * (w0 * w0 + w1 * w1 + w2 * w2) + m[i] * sq * inv_sigma) / rho[i]
         alpha[i] = 1.0 / d if d > 0.0 else 0.0
 
 
 @njit(cache=True, parallel=True)
 def density_rate(rate, start, end, nb, g, m, vel, grad, flux, rho0, inv_sigma):
-    """rate_i = D rho_i / Dt = sum_j m_j (v_i - v_j) . grad_i W_ij / sigma0 + rho0 (v_i - v_w) . G_i,
+    """rate_i = D rho_i / Dt = [sum_j m_j (v_i - v_j) . grad_i W_ij + 2 rho0 (v_i - v_w) . G_i] / sigma0
+    (the walls' part the mirror image's, :mod:`sphcore.physics.incompressible`),
     the walls' velocity as ``flux`` = sum over the wall groups of v_w . G (empty: walls at rest)."""
     dim = g.shape[1]
     moving = flux.shape[0] > 0
@@ -248,7 +249,7 @@ def density_rate(rate, start, end, nb, g, m, vel, grad, flux, rho0, inv_sigma):
             wv += vel[i, d] * grad[i, d]
         if moving:
             wv -= flux[i]
-        rate[i] = s * inv_sigma + rho0 * wv
+        rate[i] = (s + 2.0 * rho0 * wv) * inv_sigma
 
 
 @njit(cache=True, parallel=True)
