@@ -189,7 +189,11 @@ def test_tank_at_rest_alone_prints_displacements_by_region():
     (n,), = rows(r"sphcore dfsph: (\d+) particles", out, 1)
     found = {name: (int(k), float(mean), float(far)) for name, k, mean, far, _ in
              rows(rf"\s*(side|edge|floor|top|interior)\s+(\d+)\s+({NUM})\s+({NUM})\s+({NUM})", out, 5)}
-    assert sum(k for k, _, _ in found.values()) == int(n)  # every particle in one region
+    # the 8 x 8 x 8 lattice's rows: the top and floor layers, the vertical edges' and the side
+    # walls' first rows between them, and the 6 x 6 x 6 interior
+    assert int(n) == 512
+    assert {name: k for name, (k, _, _) in found.items()} == {"side": 144, "edge": 24, "floor": 64, "top": 64,
+                                                              "interior": 216}
     assert all(0.0 <= mean <= far for _, mean, far in found.values())
 
 

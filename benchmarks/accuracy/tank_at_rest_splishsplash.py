@@ -132,12 +132,14 @@ def report(name: str, frames, dx: float) -> None:
 
 
 def regions(p0: np.ndarray, dx: float) -> dict[str, np.ndarray]:
-    """Masks of the particles by where they started, against the block's first frame: within
-    dx of one side wall (x or z; "side"), of two ("edge"), of the floor, of the top, or none."""
+    """Masks of the particles by where they started, against the block's first frame: in the
+    first row along one side wall (x or z; "side"), along two ("edge"), on the floor, in the
+    top layer, or none (a row: within dx / 2 of the block's outermost particles)."""
     lo, hi = p0.min(axis=0), p0.max(axis=0)
-    near = [(p0[:, k] - lo[k] < dx) | (hi[k] - p0[:, k] < dx) for k in range(3)]
+    row = 0.5 * dx
+    near = [(p0[:, k] - lo[k] < row) | (hi[k] - p0[:, k] < row) for k in range(3)]
     sides = near[0].astype(int) + near[2]
-    floor, top = p0[:, 1] - lo[1] < dx, hi[1] - p0[:, 1] < dx
+    floor, top = p0[:, 1] - lo[1] < row, hi[1] - p0[:, 1] < row
     return {"side": (sides == 1) & ~top & ~floor, "edge": (sides == 2) & ~top & ~floor, "floor": floor & ~top,
             "top": top, "interior": (sides == 0) & ~top & ~floor}
 

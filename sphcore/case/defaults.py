@@ -103,7 +103,7 @@ CORE: dict[str, dict[str, O]] = {
                                   doc="dfsph: the divergence solve stops when the mean dt |D rho / Dt| / rho0 is below this"),
         "max_iterations": O(500, "int", positive=True,
                             doc="dfsph: a solve that has not converged after this many iterations stops the run (the "
-                                "first step's, from the hydrostatic start, needs the most: 156 in the 2D dam break)"),
+                                "first step's, from the hydrostatic start, needs the most: 86 in the 2D dam break)"),
     },
     "time": {
         "t_end": O(1.0, "float", "s", "simulated time", positive=True),

@@ -20,9 +20,11 @@ a_i = -sum_j m_j (kappa_i/rho_i + kappa_j/rho_j) grad_i W_ij - 2 (kappa_i/rho_i)
 the last term the wall's, the mirror image of the particle over the walls' share of its
 support (G the share's gradient from the wall model, :class:`sphcore.physics.equations.WallTerms`).
 The density is the kernel sum plus the walls' part, rho_i = sum_j m_j W_ij / sigma0 +
-rho0 s_i, sigma0 the kernel sum of the initial lattice and s_i the walls' share measured
-against that lattice (the wall model's ``fill``), so that the initial lattice is at rho0
-exactly, next to walls too. Its rate is D rho_i = [sum_j m_j v_ij . grad W_ij +
+w_i, sigma0 the kernel sum of the initial lattice and w_i = rho0 s_i at the start, s_i the
+walls' share measured against that lattice (the wall model's ``fill``), so that the initial
+lattice is at rho0 exactly, next to walls too; w_i then follows the rate below
+(:meth:`DivergenceFree._move_walls_density`), so it is not rho0 s_i once the particle has
+moved. Its rate is D rho_i = [sum_j m_j v_ij . grad W_ij +
 2 rho0 (v_i - v_w) . G_i] / sigma0: the walls' part is the mirror image's, which comes
 towards the particle at twice its normal velocity, as the wall's force is the image's
 (twice the particle's own pressure). With the same factor 2 in the rate as in the force, the
@@ -303,10 +305,11 @@ class DivergenceFree(SchemeBase):
         corrected it: 2 rho0 (G_n + G_n+1) / 2 . (x_n+1 - x_n) / sigma0, minus
         2 rho0 dt v_w . G / sigma0 for walls that move, the rate the density solve predicted
         with (the mirror image's, module docstring). Taken from the
-        positions alone (rho0 s(x)), it would differ from the prediction by the lattice
-        error of the wall gradient, which the solves then meet again every step
-        (measured: the floor's layer of the 2D dam break crept 0.3 % above rho0 in 300
-        steps and the density solve stalled). Zero where no wall is within the support."""
+        positions alone (rho0 s(x)), it would differ from the prediction, by the lattice
+        error of the wall gradient already with the factor 1, which the solves then meet
+        again every step (measured then: the floor's layer of the 2D dam break crept 0.3 %
+        above rho0 in 300 steps and the density solve stalled), and now by the factor 2.
+        Zero where no wall is within the support."""
         st, rho0 = self.run.particles, self.ctx.params.rho0
         w = self.run.kept[KEPT]["wall_rho"]
         np.add(self.grad_start, wall.grad, out=self.grad_start)
