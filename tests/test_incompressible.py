@@ -17,21 +17,23 @@ WENDLAND = KERNEL_IDS["wendland_c2"]
 
 def _pairs(pos, h, kid=WENDLAND, cap=4):
     """The pair list of ``pos`` as solvepairs builds it: (start, end, nb, w, g); ``cap`` the
-    first rows' capacity (a small one: the rows overflow and the walk is repeated, as the
-    scheme does)."""
+    first rows' capacity (a small one: rows overflow and the walk is repeated with the
+    counts as capacities, as the scheme does)."""
     n, dim = pos.shape
     support = SUPPORT * h
     cell, order = np.zeros(n, np.int64), np.zeros(n, np.int64)
     cell_start, nc0, nc1, nc2 = sp.bin_cells(pos, support, cell, order, np.zeros(1, np.int64))
     counts = np.zeros(n, np.int64)
+    caps = np.full(n, cap, np.int64)
+    start = np.zeros(n, np.int64)
     while True:
-        start = np.arange(n, dtype=np.int64) * cap
-        nb, w, g = np.zeros(n * cap, np.int32), np.zeros(n * cap), np.zeros((n * cap, dim))
-        sp.fill_pairs(pos, np.zeros_like(pos), support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap,
+        size = sp.row_starts(caps, start)
+        nb, w, g = np.zeros(size, np.int32), np.zeros(size), np.zeros((size, dim))
+        sp.fill_pairs(pos, np.zeros_like(pos), support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, caps,
                       nb, w, g, counts)
-        if counts.max() <= cap:
+        if np.all(counts <= caps):
             return start, start + counts, nb, w, g
-        cap = int(counts.max())
+        caps = counts.copy()
 
 
 def _lattice(count, dx):

@@ -2,17 +2,18 @@
 
 The solves of a step sweep the same pairs a few to a few tens of times, so the pairs are
 listed once per step with what every pass reads of them: a full (both-ways) neighbour list
-in rows of a fixed capacity, particle i's partners ``nb[start[i]:end[i]]`` (int32) with
-``start[i] = i cap``, and each pair's kernel value ``w`` = W_ij and gradient
-``g`` = grad_i W_ij. Each pass is then a gather over the rows: particle i sums its own row,
+in rows, particle i's partners ``nb[start[i]:end[i]]`` (int32), and each pair's kernel
+value ``w`` = W_ij and gradient ``g`` = grad_i W_ij. Each row's capacity is its particle's
+count at the last listing and a little room (:func:`row_starts`), so the rows lie close
+together: the passes stream the list from memory, and their time follows its size (rows of
+a fixed capacity of one and a half full neighbourhoods took twice as long a pass in 3D). Each pass is then a gather over the rows: particle i sums its own row,
 in the row's order, and writes only its own entry, so the passes run in parallel without
 races and give the same bits for any thread count.
 
 The list is built by binning the particles into cells of the support's size (a counting
 sort) and walking, for each particle, the 3^dim cells around its own, once: the partners
 are written into the particle's row as they are found. A row that overflows its capacity
-is counted to the end and the walk repeated with a larger one (rare: the capacity follows
-the fullest row seen). Rows hold the partners cell by cell, in the cells' sorted order:
+is counted to the end and the walk repeated with the counts as capacities. Rows hold the partners cell by cell, in the cells' sorted order:
 the list depends on the positions and the particles' order only.
 
 Symbols (module docstring of :mod:`sphcore.physics.incompressible`): m mass, rho density,
@@ -68,6 +69,16 @@ def lattice_eigenvalue(kernel_id: int, h: float, dx: float, dim: int) -> float:
     kk = np.stack(np.meshgrid(*([waves] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
     t = np.sin(kk @ x.T) @ g
     return float(((t * t).sum(axis=1)).max()) / diag
+
+
+def row_starts(caps, start) -> int:
+    """Rows of ``caps[i]`` pairs one after another: ``start[i]`` = caps[0] + ... + caps[i-1]
+    (in place); returns the list's length."""
+    if caps.shape[0] == 0:
+        return 0
+    start[0] = 0
+    np.cumsum(caps[:-1], out=start[1:])
+    return int(start[-1] + caps[-1])
 
 
 @njit(cache=True)
@@ -171,17 +182,17 @@ def _walk(i, pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h,
 
 
 @njit(cache=True, parallel=True)
-def fill_pairs(pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g, counts):
+def fill_pairs(pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, caps, nb, w, g, counts):
     """Rows start[i]:start[i] + counts[i] of nb, w (W_ij) and g (grad_i W_ij) for every
-    particle, ``counts[i]`` its partners; a row with counts[i] > cap is incomplete.
-    ``spos``: the positions in cell order (filled here)."""
+    particle, ``counts[i]`` its partners; a row with counts[i] > caps[i] (its capacity) is
+    incomplete. ``spos``: the positions in cell order (filled here)."""
     n = pos.shape[0]
     for k in prange(n):
         for d in range(pos.shape[1]):
             spos[k, d] = pos[order[k], d]
     for i in prange(n):
-        counts[i] = _walk(i, pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w,
-                          g)
+        counts[i] = _walk(i, pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, caps[i], nb,
+                          w, g)
 
 
 @njit(cache=True, parallel=True)
@@ -237,16 +248,19 @@ def density_rate(rate, start, end, nb, g, m, vel, grad, flux, rho0, inv_sigma):
     dim = g.shape[1]
     moving = flux.shape[0] > 0
     for i in prange(rate.shape[0]):
+        v0 = vel[i, 0]
+        v1 = vel[i, 1]
+        v2 = vel[i, 2] if dim == 3 else 0.0
         s = 0.0
         for p in range(start[i], end[i]):
             j = nb[p]
-            vg = 0.0
-            for d in range(dim):
-                vg += (vel[i, d] - vel[j, d]) * g[p, d]
+            vg = (v0 - vel[j, 0]) * g[p, 0] + (v1 - vel[j, 1]) * g[p, 1]
+            if dim == 3:
+                vg += (v2 - vel[j, 2]) * g[p, 2]
             s += m[j] * vg
-        wv = 0.0
-        for d in range(dim):
-            wv += vel[i, d] * grad[i, d]
+        wv = v0 * grad[i, 0] + v1 * grad[i, 1]
+        if dim == 3:
+            wv += v2 * grad[i, 2]
         if moving:
             wv -= flux[i]
         rate[i] = (s + 2.0 * rho0 * wv) * inv_sigma
