@@ -86,6 +86,13 @@ class Forces:
         self.completion = wall_completion(ctx, hook) if self.wants_walls else None
         self.n_sources = 0  # plugin sources (ghosts) of the last evaluation
         self.records_reaction = False  # keep WallTerms.react without moving walls (set by the scheme)
+        # the density's rate is wanted (a scheme that sums its density, set by it, wants the
+        # accelerations only: its evaluations leave the density diffusion out of the pair loop)
+        self.density_rates = True
+        # the wall terms are reused while the particles, their order and the clock are those
+        # they were computed at (set by a scheme that asks for them again at the same state)
+        self.reuse_wall_terms = False
+        self._wall_at = None  # (positions, ids, t) of the last wall terms, when reused
         self._L = np.zeros((1, 3, 3))
         self._grid = None
         skin = ctx.case.config["neighbours"]["skin"] * ctx.params.support
@@ -195,10 +202,17 @@ class Forces:
         return react if self._wall.active and react.shape[0] == self.ctx.state.n else None
 
     def wall_terms(self) -> WallTerms:
-        """Per-particle wall terms from the plugins that supply them (``sph_wall_terms``)."""
+        """Per-particle wall terms from the plugins that supply them (``sph_wall_terms``);
+        with ``reuse_wall_terms``, the last ones while the state is the one they were
+        computed at."""
         if not self.wants_walls:
             return self._wall
-        n, dim = self.ctx.state.n, self.ctx.params.dim
+        st = self.ctx.state
+        n, dim = st.n, self.ctx.params.dim
+        at = self._wall_at
+        if at is not None and self._wall.share.shape[0] == n and at[2] == self.ctx.t \
+                and np.array_equal(at[0], st.pos) and np.array_equal(at[1], st.id):
+            return self._wall
         if self._wall.share.shape[0] != n:
             moving = n if getattr(self.ctx.case, "moving", ()) else 0  # moving walls' terms, else empty
             # the completion's own acceleration: the loads of moving walls, and the incompressible
@@ -218,6 +232,8 @@ class Forces:
         w.react[:] = 0.0
         self.hook.sph_wall_terms(ctx=self.ctx, terms=w)
         self.ctx.counters["wall_terms"] += 1
+        if self.reuse_wall_terms:
+            self._wall_at = (st.pos.copy(), st.id.copy(), self.ctx.t)
         return w
 
     def _buffers(self, n, n_src):
@@ -234,6 +250,8 @@ class Forces:
         """Fill ``acc`` (n, dim) and ``drho`` (n,) with the rates of the current state."""
         ctx = self.ctx
         st, prm, counters = ctx.state, ctx.params, ctx.counters
+        if not self.density_rates and prm.delta > 0.0:
+            prm = prm._replace(delta=0.0)  # the diffusion changes drho only
         counters["rates"] += 1
         if not prm.sph:
             uniform_acceleration(prm.gravity, acc)

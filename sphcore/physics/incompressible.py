@@ -133,6 +133,8 @@ class DivergenceFree(SchemeBase):
         # the walls' hydrostatic push, scaled from the lattice's gradient to the solved one's
         self.push_excess = 1.0 / prm.moment_norm - 1.0
         forces.records_reaction = True
+        forces.density_rates = False  # the density is summed (the rates' drho is not read)
+        forces.reuse_wall_terms = True  # the step's rates read the terms the last finish computed
         # the rates with zero pressure (SolvedPressure) are the non-pressure accelerations
         super().__init__(run, forces.evaluate, evolves_density=False)
 
