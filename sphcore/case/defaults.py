@@ -101,6 +101,10 @@ CORE: dict[str, dict[str, O]] = {
                                doc="dfsph: the density solve stops when the mean |rho* - rho0| / rho0 is below this"),
         "divergence_tolerance": O(1e-3, "float", positive=True,
                                   doc="dfsph: the divergence solve stops when the mean dt |D rho / Dt| / rho0 is below this"),
+        "error": O("both", "str", choices=("both", "compression"),
+                   doc="dfsph: what a solve's mean error counts: both, compression and expansion (|rho* - rho0|, a free "
+                       "surface's expansion left out); compression, max(rho* - rho0, 0) only, as SPlisHSPlasH counts it "
+                       "(at the same tolerance its solves stop sooner: docs/explanation/incompressible_scheme.md)"),
         "max_iterations": O(500, "int", positive=True,
                             doc="dfsph: a solve that has not converged after this many iterations stops the run (the "
                                 "first step's, from the hydrostatic start, needs the most: 86 in the 2D dam break)"),

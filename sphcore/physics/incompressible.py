@@ -41,8 +41,10 @@ Chebyshev polynomials (:mod:`sphcore.physics.pressuresolve`). A solve iterates u
 mean error falls below the tolerance (density: |rho* - rho0| / rho0; divergence:
 dt |D rho| / rho0) after at least two (density) and one (divergence) iterations. kappa
 never falls below zero (the pressure pushes, never pulls): a particle at zero pressure that
-expands is at the free surface and counts no error. The divergence solve leaves particles
-with a thin neighbourhood alone (``FULL_SHARE``).
+expands is at the free surface and counts no error. With ``[scheme] error = "compression"``
+the error counts compression only (max(rho* - rho0, 0), SPlisHSPlasH's measure); the
+iterations still correct expansion. The divergence solve leaves particles with a thin
+neighbourhood alone (``FULL_SHARE``).
 
 Warm start: each solve starts from the last step's kappa. The density solve's is first
 replaced by its kernel average about the hydrostatic part (kappa - g . x averaged, so that
@@ -118,6 +120,7 @@ class DivergenceFree(SchemeBase):
         self.tol_density = scheme["density_tolerance"]
         self.tol_divergence = scheme["divergence_tolerance"]
         self.max_iterations = scheme["max_iterations"]
+        self.compression_only = scheme["error"] == "compression"  # the solves' error counts compression only
         self.sigma = sp.lattice_sum(prm.kernel_id, prm.h, prm.dx, prm.dim)
         self.inv_sigma = 1.0 / self.sigma
         # the Chebyshev interval of the diagonal-scaled operator (module docstring)

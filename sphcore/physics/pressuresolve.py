@@ -9,7 +9,8 @@ pressure kick of kappa's change.
 The iteration is projected Jacobi accelerated by Chebyshev polynomials (Saad 2003,
 Algorithm 12.1) on an interval of the diagonal-scaled operator's spectrum; kappa may rise
 and fall, never below zero, and the error counts compression and expansion alike (a
-particle at zero pressure that expands is at the free surface and counts none). Plain
+particle at zero pressure that expands is at the free surface and counts none), or
+compression only (``[scheme] error = "compression"``). Plain
 Jacobi diverges here, since that operator's largest eigenvalue exceeds 2 on the lattice
 (:func:`sphcore.physics.solvepairs.lattice_eigenvalue`), and weighted Jacobi damps the long
 waves too slowly to converge. Bender & Koschier's one-sided Jacobi (only a compressed
@@ -68,7 +69,7 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     it = 0
     while True:
         sp.run_pass(sp.density_rate, scheme.rate, *rows, st.m, st.vel, scheme.grad, scheme.flux, rho0, scheme.inv_sigma)
-        sp.run_pass(sp.residual, z, err_i, base, scheme.rate, dt, rho0, kappa, alpha, scale)
+        sp.run_pass(sp.residual, z, err_i, base, scheme.rate, dt, rho0, kappa, alpha, scale, scheme.compression_only)
         err = float(err_i.sum()) / (n * rho0)
         if it >= min_it and err <= tol:
             return it, err

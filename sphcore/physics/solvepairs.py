@@ -292,17 +292,23 @@ def pressure_kick(vel, start, end, nb, g, m, kr, grad, rho0, dt):
 
 
 @njit(cache=True, parallel=True)
-def residual(z, err, base, rate, dt, rho0, kappa, alpha, scale):
+def residual(z, err, base, rate, dt, rho0, kappa, alpha, scale, compression):
     """The error of a solve, e_i = base_i + dt rate_i - rho0 (the density solve, base = rho;
     the divergence solve, base = rho0, e = dt rate), and its Jacobi correction
-    z_i = e_i alpha_i * scale; err_i = |e_i|, or 0 for a particle at zero pressure that
-    expands (the free surface: the projected step holds its kappa at zero), and 0 for a
-    particle alone (alpha = 0: its own pressure cannot change its density)."""
+    z_i = e_i alpha_i * scale; err_i = |e_i| (``compression``: max(e_i, 0)), or 0 for a
+    particle at zero pressure that expands (the free surface: the projected step holds its
+    kappa at zero), and 0 for a particle alone (alpha = 0: its own pressure cannot change its
+    density)."""
     for i in prange(z.shape[0]):
         e = base[i] + dt * rate[i] - rho0
         z[i] = e * alpha[i] * scale
         solved = alpha[i] == 0.0 or (e < 0.0 and kappa[i] + z[i] <= 0.0)
-        err[i] = 0.0 if solved else abs(e)
+        if solved:
+            err[i] = 0.0
+        elif compression:
+            err[i] = max(e, 0.0)
+        else:
+            err[i] = abs(e)
 
 
 @njit(cache=True, parallel=True)
