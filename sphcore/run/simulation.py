@@ -185,7 +185,14 @@ class Simulation:
             raise CaseError(self.case.file, "time.dt", "required: no sound speed, velocity or force limits the step")
         remaining = self.t_end - self.t
         # land exactly on t_end instead of taking a sliver of a step at the end
-        return remaining if remaining <= dt * (1.0 + 1e-6) else dt
+        if remaining <= dt * (1.0 + 1e-6):
+            return remaining
+        if self.incompressible and remaining < 2.0 * dt:
+            # the density solve removes the step's density error within the step (kappa ~ 1 / dt^2):
+            # a sliver of a last step (4e-6 s after 6e-4 s in the 3D dam break) turned the error
+            # into kicks of 25 m/s and 1e8 Pa. The last two steps share what remains instead.
+            return 0.5 * remaining
+        return dt
 
     def advance(self):
         """One complete step."""
