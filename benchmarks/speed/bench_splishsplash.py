@@ -11,7 +11,8 @@ support and time step). SPlisHSPlasH 2.19.0 runs the same tank in a scene writte
 script: DFSPH (``simulationMethod`` 4), particleRadius = dx / 2 (its cubic kernel's support
 is 4 particleRadius = 2 dx), dt = 0.4 dx / |v| at most 5 ms (``cflFactor`` 1 times its
 formula's own 0.4 particle diameters), density and divergence tolerances 0.01 % and 0.1 %
-(sphcore's defaults of ``scheme.density_tolerance`` and ``divergence_tolerance``), standard
+(sphcore's defaults of ``scheme.density_tolerance`` and ``divergence_tolerance``; SPlisHSPlasH
+counts compression only, which ``--set 'scheme.error="compression"'`` asks of sphcore), standard
 viscosity 0.01, the tank a volume map (Bender et al. 2019, one cell per kernel support),
 no particle output. Its fluid is unstable when its first layer starts closer than two dx to
 a wall: the column keeps its 16 x 32 layers, moved 1.5 dx off the back wall and the floor, and
