@@ -90,7 +90,9 @@ class Forces:
         # accelerations only: its evaluations leave the density diffusion out of the pair loop)
         self.density_rates = True
         # the wall terms are reused while the particles, their order and the clock are those
-        # they were computed at (set by a scheme that asks for them again at the same state)
+        # they were computed at (set by a scheme that asks for them again at the same state; the
+        # plugins' terms then depend on positions and time alone, as the wall model's do when
+        # the force pressure is zero)
         self.reuse_wall_terms = False
         self._wall_at = None  # (positions, ids, t) of the last wall terms, when reused
         self._L = np.zeros((1, 3, 3))
@@ -200,6 +202,11 @@ class Forces:
         (``WallTerms.react``: runs with moving walls, or where a scheme asks for it), or None."""
         react = self._wall.react
         return react if self._wall.active and react.shape[0] == self.ctx.state.n else None
+
+    def forget_wall_terms(self):
+        """Compute the wall terms at the next call even at the same state (a restored
+        snapshot: the plugins' side effects, such as a moving wall's load, were undone)."""
+        self._wall_at = None
 
     def wall_terms(self) -> WallTerms:
         """Per-particle wall terms from the plugins that supply them (``sph_wall_terms``);

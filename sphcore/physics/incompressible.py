@@ -285,7 +285,7 @@ class DivergenceFree(SchemeBase):
                         nc2, prm.kernel_id, prm.h, self.start, self.caps, self.nb, self.w, self.g, self.counts)
             if not np.any(self.counts > self.caps):
                 break
-            self.ctx.counters["dfsph_pair_overflows"] += 1  # a row overflowed: the walk again, rows of its counts
+            self.ctx.counters["dfsph_pair_overflows"] += 1  # a row overflowed: the walk again, rows from its counts
         np.add(self.start, self.counts, out=self.end)
         self._walls(wall_terms())
         sp.run_pass(sp.summed_density, st.rho, self.start, self.end, self.nb, self.w, st.m, self.w0, self.inv_sigma,

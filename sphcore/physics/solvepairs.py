@@ -4,17 +4,19 @@ The solves of a step sweep the same pairs a few to a few tens of times, so the p
 listed once per step with what every pass reads of them: a full (both-ways) neighbour list
 in rows, particle i's partners ``nb[start[i]:end[i]]`` (int32), and each pair's kernel
 value ``w`` = W_ij and gradient ``g`` = grad_i W_ij. Each row's capacity is its particle's
-count at the last listing and a little room (:func:`row_starts`), so the rows lie close
+count at the last listing and some room (:func:`row_starts`), so the rows lie close
 together: the passes stream the list from memory, and their time follows its size (rows of
-a fixed capacity of one and a half full neighbourhoods took twice as long a pass in 3D). Each pass is then a gather over the rows: particle i sums its own row,
-in the row's order, and writes only its own entry, so the passes run in parallel without
-races and give the same bits for any thread count.
+a fixed capacity of one and a half full neighbourhoods took twice as long a pass in 3D).
+Each pass is then a gather over the rows: particle i sums its own row, in the row's order,
+and writes only its own entry, so the passes run in parallel without races and give the
+same bits for any thread count.
 
 The list is built by binning the particles into cells of the support's size (a counting
 sort) and walking, for each particle, the 3^dim cells around its own, once: the partners
 are written into the particle's row as they are found. A row that overflows its capacity
-is counted to the end and the walk repeated with the counts as capacities. Rows hold the partners cell by cell, in the cells' sorted order:
-the list depends on the positions and the particles' order only.
+is counted to the end and the walk repeated with capacities from the counts. Rows hold the
+partners cell by cell, in the cells' sorted order: the list depends on the positions and
+the particles' order only.
 
 Symbols (module docstring of :mod:`sphcore.physics.incompressible`): m mass, rho density,
 kappa = p / rho the solves' pressure variable, G the walls' share gradient (1/m), rho0 the

@@ -96,7 +96,10 @@ def sph_wall_terms(ctx, terms):
     """Add this plugin's walls to the per-particle boundary-integral terms, in place.
 
     Fires in every force evaluation after the neighbour search, before the pair sums, and
-    only when some plugin implements it. ``terms`` is a
+    only when some plugin implements it; under the incompressible scheme (``dfsph``) once
+    per state: an evaluation at the positions, particle order and time of the last one
+    reuses its terms, so a plugin's terms must depend on those alone there (its force
+    pressure is zero). ``terms`` is a
     :class:`sphcore.physics.equations.WallTerms` of arrays zeroed by the core: ``terms.share`` (n,)
     the wall's share of each particle's kernel support, ``terms.grad`` (n, dim) its
     gradient (1/m, towards the wall), ``terms.hydro`` (n, dim) the hydrostatic moment of the
