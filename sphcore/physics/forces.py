@@ -21,7 +21,7 @@ from sphcore.physics import eos
 from sphcore.physics.corrections import neighbour_sums
 from sphcore.physics.equations import WallTerms, sph_rates, uniform_acceleration
 from sphcore.physics.pairterms import WORK_COLUMNS
-from sphcore.physics.particles import Fields
+from sphcore.physics.particles import Fields, StateMark
 
 
 class PressureField:
@@ -94,7 +94,7 @@ class Forces:
         # plugins' terms then depend on positions and time alone, as the wall model's do when
         # the force pressure is zero)
         self.reuse_wall_terms = False
-        self._wall_at = None  # (positions, ids, t) of the last wall terms, when reused
+        self._wall_at = StateMark()  # the state of the last wall terms, when reused
         self._L = np.zeros((1, 3, 3))
         self._grid = None
         skin = ctx.case.config["neighbours"]["skin"] * ctx.params.support
@@ -206,7 +206,7 @@ class Forces:
     def forget_wall_terms(self):
         """Compute the wall terms at the next call even at the same state (a restored
         snapshot: the plugins' side effects, such as a moving wall's load, were undone)."""
-        self._wall_at = None
+        self._wall_at.clear()
 
     def wall_terms(self) -> WallTerms:
         """Per-particle wall terms from the plugins that supply them (``sph_wall_terms``);
@@ -216,9 +216,7 @@ class Forces:
             return self._wall
         st = self.ctx.state
         n, dim = st.n, self.ctx.params.dim
-        at = self._wall_at
-        if at is not None and self._wall.share.shape[0] == n and at[2] == self.ctx.t \
-                and np.array_equal(at[0], st.pos) and np.array_equal(at[1], st.id):
+        if self._wall.share.shape[0] == n and self._wall_at.holds(st, self.ctx.t):
             return self._wall
         if self._wall.share.shape[0] != n:
             moving = n if getattr(self.ctx.case, "moving", ()) else 0  # moving walls' terms, else empty
@@ -240,7 +238,7 @@ class Forces:
         self.hook.sph_wall_terms(ctx=self.ctx, terms=w)
         self.ctx.counters["wall_terms"] += 1
         if self.reuse_wall_terms:
-            self._wall_at = (st.pos.copy(), st.id.copy(), self.ctx.t)
+            self._wall_at.mark(st, self.ctx.t)
         return w
 
     def _buffers(self, n, n_src):

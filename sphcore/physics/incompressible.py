@@ -69,6 +69,7 @@ from sphcore.physics import solvepairs as sp
 from sphcore.physics.forces import PressureField
 from sphcore.physics.integrators import SchemeBase
 from sphcore.physics.kernels import SUPPORT, kernel_w, lattice_nodes
+from sphcore.physics.particles import StateMark
 
 # the divergence solve corrects only particles with at least this share of a full
 # neighbourhood (the lattice's neighbours; a wall counts with its share of the support):
@@ -131,7 +132,7 @@ class DivergenceFree(SchemeBase):
         _, r = lattice_nodes(prm.h, prm.dx, prm.dim)
         self.n_full = int(np.count_nonzero(r < SUPPORT * prm.h))  # a full neighbourhood's partners
         self.row_room = max(2, int(ROW_ROOM * self.n_full))
-        self._listed = None  # (positions, ids) the pairs were listed at
+        self._listed = StateMark()  # the positions and ids the pairs were listed at
         self._fresh_walls = False  # the walls' part of the density is to be measured (a new run)
         # the walls' hydrostatic push, scaled from the lattice's gradient to the solved one's
         self.push_excess = 1.0 / prm.moment_norm - 1.0
@@ -170,7 +171,7 @@ class DivergenceFree(SchemeBase):
         self.no_walls = np.zeros((n, dim))  # the wall gradient of a run without wall terms
         self.no_flux = np.zeros(0)
         self.rho0_base = np.full(n, self.ctx.params.rho0)
-        self._listed = None
+        self._listed.clear()
         st = self.run.particles
         kept = self.run.kept.setdefault(KEPT, {})
         for key in ("kappa", "kappa_v", "wall_rho"):
@@ -189,7 +190,7 @@ class DivergenceFree(SchemeBase):
         for key in ("kappa", "kappa_v", "wall_rho"):
             kept[key] = kept[key][order]
         self.counts[...] = self.counts[order]
-        self._listed = None
+        self._listed.clear()
 
     # -- the step -------------------------------------------------------------------------
 
@@ -271,8 +272,7 @@ class DivergenceFree(SchemeBase):
         """The pairs, the summed density (into ``state.rho``), the diagonal and the
         walls' terms of the current positions; nothing when they were listed there."""
         st, prm = self.run.particles, self.ctx.params
-        if self._listed is not None and np.array_equal(self._listed[0], st.pos) \
-                and np.array_equal(self._listed[1], st.id):
+        if self._listed.holds(st):
             return
         support = SUPPORT * prm.h
         try:
@@ -292,7 +292,7 @@ class DivergenceFree(SchemeBase):
                     self.run.kept[KEPT]["wall_rho"])
         sp.run_pass(sp.diagonal, self.alpha, self.start, self.end, self.nb, self.g, st.m, st.rho, self.grad, prm.rho0,
                     self.inv_sigma)
-        self._listed = (st.pos.copy(), st.id.copy())
+        self._listed.mark(st)
         self.ctx.counters["dfsph_pair_lists"] += 1
 
     def _walls(self, wall):

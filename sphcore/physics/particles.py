@@ -119,3 +119,31 @@ def make_block(pos, vel, rho0: float, dx: float, radius: float, kind: int) -> Pa
         kind=np.full(n, kind, np.int8),
         id=np.arange(n, dtype=np.int64),
     )
+
+
+class StateMark:
+    """The particles' positions, ids and a time that something derived from them was
+    computed at, kept in buffers reused from step to step: :meth:`holds` says whether the
+    state is still that one (so the derived quantity can be reused), :meth:`clear` forgets it."""
+
+    def __init__(self):
+        self._pos = np.zeros((0, 0))
+        self._id = np.zeros(0, np.int64)
+        self._t = None
+        self._set = False
+
+    def holds(self, st: ParticleState, t=None) -> bool:
+        return (self._set and self._t == t and self._pos.shape == st.pos.shape
+                and np.array_equal(self._pos, st.pos) and np.array_equal(self._id, st.id))
+
+    def mark(self, st: ParticleState, t=None) -> None:
+        if self._pos.shape != st.pos.shape:
+            self._pos = np.empty_like(st.pos)
+            self._id = np.empty_like(st.id)
+        np.copyto(self._pos, st.pos)
+        np.copyto(self._id, st.id)
+        self._t = t
+        self._set = True
+
+    def clear(self) -> None:
+        self._set = False
