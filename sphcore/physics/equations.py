@@ -357,6 +357,12 @@ def completion_tag(completion) -> str:
     return f"{py.__module__}.{py.__qualname__}".replace(".", "_").replace("<", "_").replace(">", "_") + "_" + digest
 
 
+def finish_twin(name: str, completion=None):
+    """The per-particle finish of the rates (gravity and the wall ``completion``, None: no
+    wall terms) compiled for inlining into a pair loop's twin named ``name``."""
+    return njit(cache=True, inline="always")(twin(_finish, name, COMPLETE=_no_completion if completion is None else completion))
+
+
 def _build(dim: int, completion=None, three_pass: bool | None = None):
     """The pair loop's twin for ``dim``, with the wall ``completion`` compiled in (None:
     without wall terms); ``three_pass`` (default: in 3D) walks the partners in three passes,
@@ -366,7 +372,7 @@ def _build(dim: int, completion=None, three_pass: bool | None = None):
     walls = completion is not None
     name = f"_{dim}d" + (f"_walls_{completion_tag(completion)}" if walls else "") + (
         "" if three == (dim == 3) else ("_three" if three else "_fused"))
-    finish = njit(cache=True, inline="always")(twin(_finish, name, COMPLETE=completion if walls else _no_completion))
+    finish = finish_twin(name, completion)
     # error_model="numpy" in every twin, 2D and 3D, and in the passes before and after the
     # pairs (_prepare, _finish, inlined here): a float division by zero gives inf instead of
     # raising, so that the three-pass loop, which divides, can be vectorised (the checks

@@ -4,6 +4,10 @@
     -> [hook sph_wall_terms] -> kernel-gradient matrices (optional) -> pair sums
     (:func:`sphcore.physics.equations.sph_rates`) -> [hook sph_accelerations]
 
+A scheme that keeps a full pair list of the current state (the incompressible scheme's)
+offers it in ``Forces.listed``: the pair sums then walk that list instead of the cells
+(:mod:`sphcore.physics.listedrates`).
+
 Called by the integrators (:mod:`sphcore.physics.integrators`) whenever they need rates; the
 pressure field the momentum equation uses is kept here too (:class:`PressureField`).
 Only what the case models runs; ``ctx.counters`` records which kernels did.
@@ -20,6 +24,7 @@ from sphcore.neighbours.pairlist import PairList
 from sphcore.physics import eos
 from sphcore.physics.corrections import neighbour_sums
 from sphcore.physics.equations import WallTerms, sph_rates, uniform_acceleration
+from sphcore.physics.listedrates import listed_rates
 from sphcore.physics.pairterms import WORK_COLUMNS
 from sphcore.physics.particles import Fields, StateMark
 
@@ -95,6 +100,9 @@ class Forces:
         # the force pressure is zero)
         self.reuse_wall_terms = False
         self._wall_at = StateMark()  # the state of the last wall terms, when reused
+        # a scheme that keeps a full pair list of the current state offers it here: a callable
+        # returning (start, end, nb, w, g) (sphcore.physics.listedrates), or None when stale
+        self.listed = None
         self._L = np.zeros((1, 3, 3))
         self._grid = None
         skin = ctx.case.config["neighbours"]["skin"] * ctx.params.support
@@ -263,6 +271,15 @@ class Forces:
         else:
             self.hook.sph_before_forces(ctx=ctx)
             src = self.sources()
+            listed = self._listed_pairs(prm)
+            if listed is not None:
+                wall = self.wall_terms()
+                self._buffers(st.n, st.n)
+                listed_rates(st.n, src, prm, wall, *listed, acc, drho, self._work[:st.n], self.completion)
+                counters["rates_from_pair_list"] += 1
+                self._count_terms(prm)
+                self.hook.sph_accelerations(ctx=ctx, acc=acc)
+                return
             view = self.pair_view(src)
             wall = self.wall_terms()
             self._buffers(st.n, src.pos.shape[0])
@@ -272,15 +289,27 @@ class Forces:
             n_src = src.pos.shape[0]
             sph_rates(st.n, src, view, prm, self._L, wall, acc, drho, self._work[:n_src], self._spos[:n_src],
                       numba.get_num_threads(), self.completion)
-            counters["continuity"] += 1
-            counters["momentum"] += 1
-            if prm.alpha > 0 or prm.beta > 0:
-                counters["artificial_viscosity"] += 1
-            if prm.nu > 0:
-                counters["laminar_viscosity"] += 1
-            if prm.delta > 0:
-                counters["density_diffusion"] += 1
+            self._count_terms(prm)
         self.hook.sph_accelerations(ctx=ctx, acc=acc)
+
+    def _listed_pairs(self, prm):
+        """The scheme's pair list of the current state, when the rates can be summed over it
+        (:mod:`sphcore.physics.listedrates`: no plugin sources, kernel gradient correction or
+        density diffusion), else None."""
+        if self.listed is None or self.n_sources or prm.kernel_gradient or prm.delta > 0.0:
+            return None
+        return self.listed()
+
+    def _count_terms(self, prm):
+        counters = self.ctx.counters
+        counters["continuity"] += 1
+        counters["momentum"] += 1
+        if prm.alpha > 0 or prm.beta > 0:
+            counters["artificial_viscosity"] += 1
+        if prm.nu > 0:
+            counters["laminar_viscosity"] += 1
+        if prm.delta > 0:
+            counters["density_diffusion"] += 1
 
     def shepard_density(self, out):
         """out <- Shepard-filtered density (Chen et al. 1999, CSPH zeroth order) over the

@@ -6,7 +6,8 @@ the step follows the flow (a CFL number on the flow's velocity) instead of an ar
 sound speed ten times faster than the flow. A step (Bender & Koschier 2017, Algorithm 2,
 written around sphcore's step):
 
-    rates:        a_np = g + viscosity + the walls' hydrostatic push  (pressure zero)
+    rates:        a_np = g + viscosity + the walls' hydrostatic push  (pressure zero),
+                  summed over the pair list the last finish made at these positions
     dt:           cfl h / |v|max, the force and viscous limits, dt_max, plugins' bounds
     free motion:  v* = v + dt a_np
                   density solve: kappa such that rho_i + dt D rho_i(v*) = rho0
@@ -139,6 +140,7 @@ class DivergenceFree(SchemeBase):
         forces.records_reaction = True
         forces.density_rates = False  # the density is summed (the rates' drho is not read)
         forces.reuse_wall_terms = True  # the step's rates read the terms the last finish computed
+        forces.listed = self._pairs_now  # the rates sum over the solves' pair list
         # the rates with zero pressure (SolvedPressure) are the non-pressure accelerations
         super().__init__(run, forces.evaluate, evolves_density=False)
 
@@ -192,11 +194,18 @@ class DivergenceFree(SchemeBase):
         self.counts[...] = self.counts[order]
         self._listed.clear()
 
+    def restored(self):
+        """The pairs were listed at a state that was undone (the start-up probe's rates):
+        listed again at the next call, with the summed density they write into the state."""
+        self._listed.clear()
+
     # -- the step -------------------------------------------------------------------------
 
     def rates(self):
-        """The non-pressure accelerations: the rates with zero pressure, the walls'
-        hydrostatic push divided by lambda.
+        """The non-pressure accelerations: the rates with zero pressure, summed over the
+        solves' pair list of the current positions (:mod:`sphcore.physics.listedrates`; the
+        list is made here when a reorder or a new run left none), the walls' hydrostatic push
+        divided by lambda.
 
         The SPH gradient of a linear pressure on the lattice is lambda times the exact one
         (``Params.moment_norm``, 0.974 in 2D at h = 1.3 dx), so water at rest holds itself
@@ -208,6 +217,7 @@ class DivergenceFree(SchemeBase):
         r = self.run.rates
         if r.fresh:
             return
+        self._list_pairs(self.forces.wall_terms)
         self.rates_fn(r.acc, r.drho)
         react = self.forces.wall_react()
         if react is not None:
@@ -256,6 +266,13 @@ class DivergenceFree(SchemeBase):
         return False
 
     # -- pieces ---------------------------------------------------------------------------
+
+    def _pairs_now(self):
+        """The pair list (start, end, nb, w, g) when it was listed at the current state, else
+        None (the rates then walk the cells)."""
+        if not self._listed.holds(self.run.particles):
+            return None
+        return self.start, self.end, self.nb, self.w, self.g
 
     def _rows(self):
         """Each particle's row sized to its partners at the last listing and ROW_ROOM more

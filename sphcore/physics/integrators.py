@@ -119,6 +119,10 @@ class SchemeBase:
         np.take(r.drho, order, out=self._drho_spare, mode="clip")  # "raise" would buffer
         r.drho, self._drho_spare = self._drho_spare, r.drho
 
+    def restored(self):
+        """The run state was put back from a snapshot: forget what was derived from the state
+        since it was taken (nothing here; a scheme that keeps more says what)."""
+
     def invalidate(self):
         """The state changed outside a step (density filter): recompute rates first."""
         self.run.rates.fresh = False

@@ -139,6 +139,7 @@ class Simulation:
         self.run.restore(snap)
         self.ctx.force_pressure[...] = snap.extra["force_pressure"]
         self.forces.forget_wall_terms()
+        self.integrator.restored()
 
     # -- pieces of a step ---------------------------------------------------------------
 
