@@ -360,7 +360,8 @@ def completion_tag(completion) -> str:
 def finish_twin(name: str, completion=None):
     """The per-particle finish of the rates (gravity and the wall ``completion``, None: no
     wall terms) compiled for inlining into a pair loop's twin named ``name``."""
-    return njit(cache=True, inline="always")(twin(_finish, name, COMPLETE=_no_completion if completion is None else completion))
+    complete = _no_completion if completion is None else completion
+    return njit(cache=True, inline="always")(twin(_finish, name, COMPLETE=complete))
 
 
 def _build(dim: int, completion=None, three_pass: bool | None = None):
