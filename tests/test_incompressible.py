@@ -29,8 +29,8 @@ def _pairs(pos, h, kid=WENDLAND, cap=4):
     while True:
         size = sp.row_starts(caps, start)
         nb, w, g = np.zeros(size, np.int32), np.zeros(size), np.zeros((size, dim))
-        sp.fill_pairs(pos, np.zeros_like(pos), support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, caps,
-                      nb, w, g, counts)
+        sp.fill_pairs(pos, np.zeros_like(pos), support, order, cell_start, nc0, nc1, nc2, kid, h, start, caps,
+                      nb, w, g, counts, 2)
         if np.all(counts <= caps):
             return start, start + counts, nb, w, g
         caps = counts.copy()
@@ -404,3 +404,23 @@ def test_the_rates_summed_over_the_pair_list_are_the_cell_walk_s_to_round_off(tm
     assert scale > 1.0  # the pair terms are not negligible
     np.testing.assert_allclose(acc_list, acc_walk, rtol=0.0, atol=1e-12 * scale)
     np.testing.assert_allclose(drho_list, drho_walk, rtol=0.0, atol=1e-12 * np.abs(drho_walk).max())
+
+
+def test_the_walls_density_is_measured_after_the_start_up_probe(tmp_path):
+    """The start-up probe evaluates the first rates (which list the pairs and measure the
+    walls' part of the density) and puts the run state back: the run measures it again, so
+    that the column's lattice starts at rho0 next to the walls as inside. Without it the
+    floor's and the wall's layers would start at about rho0 (1 - s), half of it at the floor."""
+    from conftest import write_case
+
+    from sphcore.run import runner
+
+    dt = 2.0 ** -10
+    result = runner.run(write_case(tmp_path / "case", _column(dt, dt)), output=tmp_path / "out", quiet=True)
+    st = result.simulation.state
+    wall_rho = result.simulation.run.kept["dfsph"]["wall_rho"]
+    assert np.count_nonzero(wall_rho) > st.n // 4
+    support = result.simulation.params.support
+    covered = (st.pos[:, 0] < 0.12 - support) & (st.pos[:, 1] < 0.24 - support)  # away from the free surfaces
+    assert covered.sum() > st.n // 2 and np.count_nonzero(wall_rho[covered]) > st.n // 8
+    assert np.abs(st.rho[covered] / 1000.0 - 1.0).max() < 2e-3

@@ -62,6 +62,7 @@ known from the positions alone.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from sphcore.errors import Instability
@@ -84,6 +85,9 @@ FULL_SHARE = 0.75
 # dam break at h = dx: 97 of 380 listings overflowed with 0.125, none with 0.25)
 ROW_ROOM = 0.25
 KEPT = "dfsph"  # the run state's namespace of the warm starts (run.kept) and the solves' figures
+# run.kept[KEPT][MEASURED]: the walls' part of the density was measured (at the run's first listing; in
+# the run state, so that a restored snapshot taken before that listing measures it again)
+MEASURED = "walls_measured"
 
 
 class SolvedPressure(PressureField):
@@ -134,7 +138,6 @@ class DivergenceFree(SchemeBase):
         self.n_full = int(np.count_nonzero(r < SUPPORT * prm.h))  # a full neighbourhood's partners
         self.row_room = max(2, int(ROW_ROOM * self.n_full))
         self._listed = StateMark()  # the positions and ids the pairs were listed at
-        self._fresh_walls = False  # the walls' part of the density is to be measured (a new run)
         # the walls' hydrostatic push, scaled from the lattice's gradient to the solved one's
         self.push_excess = 1.0 / prm.moment_norm - 1.0
         forces.records_reaction = True
@@ -179,7 +182,8 @@ class DivergenceFree(SchemeBase):
         for key in ("kappa", "kappa_v", "wall_rho"):
             if key not in kept or kept[key].shape != (n,):
                 kept[key] = np.zeros(n)
-                self._fresh_walls = True
+                kept[MEASURED] = False
+        kept.setdefault(MEASURED, True)  # a checkpoint's run measured them
         if not self.ctx.restarting and not np.any(kept["kappa"]):
             # the start's hydrostatic pressure, at the gradient the lattice holds itself with (rates)
             kept["kappa"][:] = st.p / st.rho / self.ctx.params.moment_norm
@@ -298,8 +302,9 @@ class DivergenceFree(SchemeBase):
             raise Instability(self.ctx.step, self.ctx.t, -1, f"neighbour search failed: {e}") from None
         while True:
             self._rows()
-            sp.run_pass(sp.fill_pairs, st.pos, self.spos, support, self.cell, self.order, self.cell_start, nc0, nc1,
-                        nc2, prm.kernel_id, prm.h, self.start, self.caps, self.nb, self.w, self.g, self.counts)
+            sp.run_pass(sp.fill_pairs, st.pos, self.spos, support, self.order, self.cell_start, nc0, nc1,
+                        nc2, prm.kernel_id, prm.h, self.start, self.caps, self.nb, self.w, self.g, self.counts,
+                        numba.get_num_threads())
             if not np.any(self.counts > self.caps):
                 break
             self.ctx.counters["dfsph_pair_overflows"] += 1  # a row overflowed: the walk again, rows from its counts
@@ -319,7 +324,7 @@ class DivergenceFree(SchemeBase):
         if not wall.active:
             self.grad, self.flux = self.no_walls, self.no_flux
             return
-        if self._fresh_walls:
+        if not self.run.kept[KEPT][MEASURED]:
             self._start_walls_density(wall)
         self.grad = wall.grad
         self.flux = wall.flux if wall.flux.shape[0] == n else self.no_flux
@@ -332,7 +337,7 @@ class DivergenceFree(SchemeBase):
         share, fill = wall.share, wall.fill
         s = np.where(fill > 0.0, (self.full - fill) * self.inv_sigma, share)
         self.run.kept[KEPT]["wall_rho"][:] = np.where(share > 0.0, s, 0.0) * self.ctx.params.rho0
-        self._fresh_walls = False
+        self.run.kept[KEPT][MEASURED] = True
 
     def _move_walls_density(self, wall, dt):
         """The walls' part of the density follows the step's displacement as the walls

