@@ -92,11 +92,13 @@ def test_the_kernel_average_keeps_a_hydrostatic_pressure_exactly_next_to_walls_a
     rho = np.full(n, 1000.0) * rng.uniform(0.98, 1.02, n)
     m = np.full(n, 1000.0 * dx * dx)
     out = np.zeros(n)
-    sp.kernel_average(out, start, end, nb, w, m, rho, pos, kappa, gravity, kernel_w(WENDLAND, 0.0, h, 2))
+    sp.kernel_average(out, start, end, nb, w, m, rho, pos, kappa, gravity, kernel_w(WENDLAND, 0.0, h, 2),
+                      np.zeros(n), np.zeros(n))
     np.testing.assert_allclose(out, kappa, rtol=0, atol=1e-12)
     # and it removes a pressure alternating between particle layers (the solves' blind mode)
     layered = kappa + np.where(np.round(pos[:, 1] / dx - 0.5).astype(int) % 2 == 0, 1.0, -1.0)
-    sp.kernel_average(out, start, end, nb, w, m, rho, pos, layered, gravity, kernel_w(WENDLAND, 0.0, h, 2))
+    sp.kernel_average(out, start, end, nb, w, m, rho, pos, layered, gravity, kernel_w(WENDLAND, 0.0, h, 2),
+                      np.zeros(n), np.zeros(n))
     inner = np.all((pos > 3 * h) & (pos < np.array([0.2, 0.3]) - 3 * h), axis=1)
     assert np.abs(out - kappa)[inner].max() < 0.5 * np.abs(layered - kappa)[inner].min()
 

@@ -237,9 +237,9 @@ class DivergenceFree(SchemeBase):
         np.multiply(self.run.rates.acc, dt, out=self.kick)
         st.vel += self.kick
         kept = self.run.kept[KEPT]
-        smooth = self.dkappa  # scratch until the iterations
+        smooth = self.dkappa  # scratch until the iterations (err and rate too)
         sp.run_pass(sp.kernel_average, smooth, self.start, self.end, self.nb, self.w, st.m, st.rho, st.pos,
-                    kept["kappa"], self.ctx.params.gravity, self.w0)
+                    kept["kappa"], self.ctx.params.gravity, self.w0, self.err, self.rate)
         np.maximum(smooth, 0.0, out=kept["kappa"])
         n_it, err = self._solve(kept["kappa"], st.rho, dt, self.tol_density, 2, "density")
         self._record("density", n_it, err)

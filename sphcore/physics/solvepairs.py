@@ -345,27 +345,31 @@ def projected_step(d, z, kappa, c_old, c_new):
 
 
 @njit(cache=True, parallel=True)
-def kernel_average(out, start, end, nb, w, m, rho, pos, kappa, gravity, w0):
+def kernel_average(out, start, end, nb, w, m, rho, pos, kappa, gravity, w0, vol, q):
     """out_i = kernel average of kappa about its hydrostatic part: with q = kappa - g . x
     (constant in a fluid at rest, kappa = p / rho = |g| depth + const),
     out_i = g . x_i + sum_j V_j q_j W_ij / sum_j V_j W_ij over i's neighbours and itself
     (Shepard, V = m / rho). A Shepard average is exact for a constant, also where the
     support is cut by a wall or the free surface, so a hydrostatic kappa is kept exactly
-    there; a linear field would not be."""
+    there; a linear field would not be. ``vol`` and ``q`` (n,): scratch for V and q, taken
+    once per particle rather than once per pair."""
     dim = pos.shape[1]
     for i in prange(out.shape[0]):
         gxi = 0.0
         for d in range(dim):
             gxi += gravity[d] * pos[i, d]
-        vi = m[i] / rho[i] * w0
-        num = vi * (kappa[i] - gxi)
+        vol[i] = m[i] / rho[i]
+        q[i] = kappa[i] - gxi
+    for i in prange(out.shape[0]):
+        gxi = 0.0
+        for d in range(dim):
+            gxi += gravity[d] * pos[i, d]
+        vi = vol[i] * w0
+        num = vi * q[i]
         den = vi
         for p in range(start[i], end[i]):
             j = nb[p]
-            gxj = 0.0
-            for d in range(dim):
-                gxj += gravity[d] * pos[j, d]
-            v = m[j] / rho[j] * w[p]
-            num += v * (kappa[j] - gxj)
+            v = vol[j] * w[p]
+            num += v * q[j]
             den += v
         out[i] = num / den + gxi
