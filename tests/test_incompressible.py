@@ -426,3 +426,42 @@ def test_the_walls_density_is_measured_after_the_start_up_probe(tmp_path):
     covered = (st.pos[:, 0] < 0.12 - support) & (st.pos[:, 1] < 0.24 - support)  # away from the free surfaces
     assert covered.sum() > st.n // 2 and np.count_nonzero(wall_rho[covered]) > st.n // 8
     assert np.abs(st.rho[covered] / 1000.0 - 1.0).max() < 2e-3
+
+
+def test_a_reorder_renumbers_the_pair_list_as_a_new_listing_would_give_it(tmp_path):
+    """After a reorder the pair list is not made again: each row follows its particle and its
+    partners are renumbered. Each row holds then the same partners with the same W_ij and
+    grad W_ij as a new listing at the same positions, and the diagonal and the summed density
+    agree to round-off (the new listing adds the partners in another order)."""
+    from conftest import write_case
+
+    from sphcore.run import runner
+
+    dt = 2.0 ** -10
+    result = runner.run(write_case(tmp_path / "case", _column(dt, 4 * dt)), output=tmp_path / "out", quiet=True)
+    sim = result.simulation
+    integ, st = sim.integrator, sim.state
+    assert integ._pairs_now() is not None
+    order = np.random.default_rng(2).permutation(st.n)
+    st.permute(order)
+    integ.permute(order)
+    sim.forces.reordered(order)
+    assert integ._pairs_now() is not None  # the list holds the reordered state
+
+    def rows():
+        integ._list_pairs(sim.forces.wall_terms)
+        out = []
+        for i in range(st.n):
+            part = slice(integ.start[i], integ.end[i])
+            k = np.argsort(integ.nb[part], kind="stable")
+            out.append((integ.nb[part][k], integ.w[part][k], integ.g[part][k]))
+        return out, integ.alpha.copy(), st.rho.copy()
+
+    followed, alpha_f, rho_f = rows()
+    integ.restored()  # forget the listing: made anew at the same positions
+    fresh, alpha_n, rho_n = rows()
+    for (nb_f, w_f, g_f), (nb_n, w_n, g_n) in zip(followed, fresh):
+        assert np.array_equal(nb_f, nb_n) and np.array_equal(w_f, w_n) and np.array_equal(g_f, g_n)
+    np.testing.assert_allclose(alpha_f, alpha_n, rtol=1e-12)
+    np.testing.assert_allclose(rho_f, rho_n, rtol=1e-13)
+    assert sum(len(r[0]) for r in fresh) > 5 * st.n

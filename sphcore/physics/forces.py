@@ -83,9 +83,11 @@ def wall_completion(ctx, hook):
 
 
 class Forces:
-    """Evaluates rates for one run. ``hook``: the run's :class:`sphcore.plugin.pluginhost.HookRelay`."""
+    """Evaluates rates for one run. ``hook``: the run's :class:`sphcore.plugin.pluginhost.HookRelay`;
+    ``keep_pairs``: keep a Verlet pair list (``neighbours.skin``) where the run can (a scheme
+    that lists its own pairs every step asks for none)."""
 
-    def __init__(self, ctx, hook, pressure: PressureField):
+    def __init__(self, ctx, hook, pressure: PressureField, keep_pairs: bool = True):
         self.ctx, self.hook, self.pressure = ctx, hook, pressure
         self.wants_walls = "sph_wall_terms" in hook.implemented
         self.completion = wall_completion(ctx, hook) if self.wants_walls else None
@@ -107,7 +109,7 @@ class Forces:
         self._grid = None
         skin = ctx.case.config["neighbours"]["skin"] * ctx.params.support
         # plugin sources (ghosts) change every step: such runs walk the cells at every evaluation
-        keep = skin > 0 and ctx.params.sph and "sph_extra_sources" not in hook.implemented
+        keep = keep_pairs and skin > 0 and ctx.params.sph and "sph_extra_sources" not in hook.implemented
         self.pairs = PairList(ctx.params.support, skin) if keep else None
         self._shepard = np.zeros(1)
         self._work = np.zeros((0, WORK_COLUMNS))

@@ -145,5 +145,12 @@ class StateMark:
         self._t = t
         self._set = True
 
+    def permute(self, order: np.ndarray) -> None:
+        """Follow a reordering of the particles (new index k = old index ``order[k]``): the
+        mark holds the reordered state if and only if it held the state before."""
+        if self._set:
+            self._pos = self._pos[order]
+            self._id = self._id[order]
+
     def clear(self) -> None:
         self._set = False

@@ -215,6 +215,15 @@ def fill_pairs(pos, spos, support, order, cell_start, nc0, nc1, nc2, kid, h, sta
 
 
 @njit(cache=True, parallel=True)
+def renumber(start, end, nb, new_index):
+    """nb <- new_index[nb] in every row: the partners' numbers after the particles were
+    reordered (the rows themselves keep their place in the list)."""
+    for i in prange(start.shape[0]):
+        for p in range(start[i], end[i]):
+            nb[p] = new_index[nb[p]]
+
+
+@njit(cache=True, parallel=True)
 def summed_density(rho, start, end, nb, w, m, w0, inv_sigma, wall_rho):
     """rho_i = (m_i W(0) + sum_j m_j W_ij) / sigma0 + wall_rho_i."""
     for i in prange(rho.shape[0]):

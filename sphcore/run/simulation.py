@@ -49,7 +49,8 @@ class Simulation:
                                     restarting=restarting,
                                     plugin_name=lambda plugin: pm.get_name(plugin) or type(plugin).__name__)
         self.hooks = HookRelay(pm)  # the per-step hooks (no pluggy call where none is implemented)
-        self.forces = Forces(ctx, self.hooks, self.pressure)
+        # dfsph lists its pairs every step (sphcore.physics.solvepairs): no Verlet list beside
+        self.forces = Forces(ctx, self.hooks, self.pressure, keep_pairs=not self.incompressible)
         run.attach_pairs(self.forces.pairs)  # a restart's lists are rebuilt from its anchor
         if self.incompressible:
             if "sph_extra_sources" in self.hooks.implemented:
