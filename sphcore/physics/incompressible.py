@@ -62,16 +62,14 @@ known from the positions alone.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
-from sphcore.errors import Instability
 from sphcore.physics import pressuresolve
 from sphcore.physics import solvepairs as sp
 from sphcore.physics.forces import PressureField
 from sphcore.physics.integrators import SchemeBase
-from sphcore.physics.kernels import SUPPORT, kernel_w, lattice_nodes
-from sphcore.physics.particles import StateMark
+from sphcore.physics.kernels import kernel_w
+from sphcore.physics.solvelist import SolveList
 
 # the divergence solve corrects only particles with at least this share of a full
 # neighbourhood (the lattice's neighbours; a wall counts with its share of the support):
@@ -80,10 +78,6 @@ from sphcore.physics.particles import StateMark
 # Buchner dam break at 1.25 s). SPlisHSPlasH's DFSPH skips such particles likewise (7 of 8
 # lattice neighbours in 2D, 20 of 26 in 3D at its support of 2 dx).
 FULL_SHARE = 0.75
-# each row of the pair list holds the particle's partners at the last listing and this share of
-# a full neighbourhood more (at least 2): a row that overflows repeats the step's walk (the 3D
-# dam break at h = dx: 97 of 380 listings overflowed with 0.125, none with 0.25)
-ROW_ROOM = 0.25
 KEPT = "dfsph"  # the run state's namespace of the warm starts (run.kept) and the solves' figures
 # run.kept[KEPT][MEASURED]: the walls' part of the density was measured (at the run's first listing; in
 # the run state, so that a restored snapshot taken before that listing measures it again)
@@ -134,10 +128,8 @@ class DivergenceFree(SchemeBase):
         self.spectrum = pressuresolve.chebyshev_interval(lam)
         self.w0 = kernel_w(prm.kernel_id, 0.0, prm.h, prm.dim)
         self.full = self.sigma - prm.dx ** prm.dim * self.w0  # a full neighbourhood's sum_j V_j W_ij (self excluded)
-        _, r = lattice_nodes(prm.h, prm.dx, prm.dim)
-        self.n_full = int(np.count_nonzero(r < SUPPORT * prm.h))  # a full neighbourhood's partners
-        self.row_room = max(2, int(ROW_ROOM * self.n_full))
-        self._listed = StateMark()  # the positions and ids the pairs were listed at
+        self.pairs = SolveList(prm, ctx)  # the pair list, listed at the positions pairs.mark holds
+        self.n_full = self.pairs.n_full  # a full neighbourhood's partners
         # the walls' hydrostatic push, scaled from the lattice's gradient to the solved one's
         self.push_excess = 1.0 / prm.moment_norm - 1.0
         forces.records_reaction = True
@@ -150,16 +142,7 @@ class DivergenceFree(SchemeBase):
     # -- arrays ---------------------------------------------------------------------------
 
     def _extra_arrays(self, n, dim):
-        self.cell = np.zeros(n, np.int64)
-        self.order = np.zeros(n, np.int64)
-        self.cell_start = np.zeros(1, np.int64)
-        self.counts = np.full(n, self.n_full, np.int64)  # the partners at the last listing (rows' capacities)
-        self.start = np.zeros(n, np.int64)
-        self.end = np.zeros(n, np.int64)
-        self.caps = np.zeros(n, np.int64)
-        self.nb = np.zeros(0, np.int32)
-        self.w = np.zeros(0)
-        self.g = np.zeros((0, dim))
+        self.pairs.resize(n)
         self.alpha = np.zeros(n)
         self.alpha_v = np.zeros(n)
         self.partners = np.zeros(n)
@@ -168,7 +151,6 @@ class DivergenceFree(SchemeBase):
         self.dkappa = np.zeros(n)
         self.step_d = np.zeros(n)
         self.kick_ratio = np.zeros(n)
-        self.spos = np.zeros((n, dim))
         self.err = np.zeros(n)
         self.moved = np.zeros(n)
         self.kick = np.zeros((n, dim))
@@ -176,9 +158,7 @@ class DivergenceFree(SchemeBase):
         self.no_walls = np.zeros((n, dim))  # the wall gradient of a run without wall terms
         self.no_flux = np.zeros(0)
         self.rho0_base = np.full(n, self.ctx.params.rho0)
-        self.new_index = np.zeros(n, np.int64)  # a reorder's new number of each particle
         self._walls_follow = False  # the walls' terms are to be taken in a new particle order
-        self._listed.clear()
         st = self.run.particles
         kept = self.run.kept.setdefault(KEPT, {})
         for key in ("kappa", "kappa_v", "wall_rho"):
@@ -189,6 +169,10 @@ class DivergenceFree(SchemeBase):
         if not self.ctx.restarting and not np.any(kept["kappa"]):
             # the start's hydrostatic pressure, at the gradient the lattice holds itself with (rates)
             kept["kappa"][:] = st.p / st.rho / self.ctx.params.moment_norm
+
+    def reorder_plan(self, forces):
+        """The order of the pair list's cells (:meth:`sphcore.physics.solvelist.SolveList.plan`)."""
+        return self.pairs.plan(self.run.particles)
 
     def permute(self, order):
         """Follow a reordering of the particles: the rates, the warm starts and the walls'
@@ -201,17 +185,14 @@ class DivergenceFree(SchemeBase):
         kept = self.run.kept[KEPT]
         for key in ("kappa", "kappa_v", "wall_rho"):
             kept[key] = kept[key][order]
-        for a in (self.counts, self.start, self.end, self.alpha):
-            a[...] = a[order]
-        self.new_index[order] = np.arange(order.shape[0])
-        sp.run_pass(sp.renumber, self.start, self.end, self.nb, self.new_index)
-        self._listed.permute(order)
+        self.alpha[...] = self.alpha[order]
+        self.pairs.permute(order)
         self._walls_follow = True
 
     def restored(self):
         """The pairs were listed at a state that was undone (the start-up probe's rates):
         listed again at the next call, with the summed density they write into the state."""
-        self._listed.clear()
+        self.pairs.mark.clear()
 
     # -- the step -------------------------------------------------------------------------
 
@@ -248,7 +229,8 @@ class DivergenceFree(SchemeBase):
         st.vel += self.kick
         kept = self.run.kept[KEPT]
         smooth = self.dkappa  # scratch until the iterations (err and rate too)
-        sp.run_pass(sp.kernel_average, smooth, self.start, self.end, self.nb, self.w, st.m, st.rho, st.pos,
+        pl = self.pairs
+        sp.run_pass(sp.kernel_average, smooth, pl.start, pl.end, pl.nb, pl.w, st.m, st.rho, st.pos,
                     kept["kappa"], self.ctx.params.gravity, self.w0, self.err, self.rate)
         np.maximum(smooth, 0.0, out=kept["kappa"])
         n_it, err = self._solve(kept["kappa"], st.rho, dt, self.tol_density, 2, "density")
@@ -268,7 +250,7 @@ class DivergenceFree(SchemeBase):
         kept = self.run.kept[KEPT]
         # the partners, a wall counted by its share: full neighbourhoods take part (FULL_SHARE)
         np.multiply(kept["wall_rho"], self.n_full / self.ctx.params.rho0, out=self.partners)
-        self.partners += self.counts
+        self.partners += self.pairs.counts
         np.greater_equal(self.partners, FULL_SHARE * self.n_full, out=self.thick)
         np.multiply(self.alpha, self.thick, out=self.alpha_v)
         np.multiply(kept["kappa_v"], self.thick, out=kept["kappa_v"])
@@ -284,51 +266,29 @@ class DivergenceFree(SchemeBase):
     def _pairs_now(self):
         """The pair list (start, end, nb, w, g) when it was listed at the current state, else
         None (the rates then walk the cells)."""
-        if not self._listed.holds(self.run.particles):
+        pl = self.pairs
+        if not pl.mark.holds(self.run.particles):
             return None
-        return self.start, self.end, self.nb, self.w, self.g
-
-    def _rows(self):
-        """Each particle's row sized to its partners at the last listing and ROW_ROOM more
-        (:func:`sphcore.physics.solvepairs.row_starts`); the list's arrays grow when short."""
-        np.add(self.counts, self.row_room, out=self.caps)
-        size = sp.row_starts(self.caps, self.start)
-        if self.nb.shape[0] < size:
-            size += size // 8
-            self.nb = np.zeros(size, np.int32)
-            self.w = np.zeros(size)
-            self.g = np.zeros((size, self.ctx.params.dim))
+        return pl.start, pl.end, pl.nb, pl.w, pl.g
 
     def _list_pairs(self, wall_terms):
         """The pairs, the summed density (into ``state.rho``), the diagonal and the
-        walls' terms of the current positions; nothing when they were listed there."""
-        st, prm = self.run.particles, self.ctx.params
-        if self._listed.holds(st):
+        walls' terms of the current positions; nothing when they were listed there (the
+        walls' terms only, after a reorder)."""
+        st, prm, pl = self.run.particles, self.ctx.params, self.pairs
+        if pl.mark.holds(st):
             if self._walls_follow:
                 self._walls(wall_terms())
                 self._walls_follow = False
             return
         self._walls_follow = False
-        support = SUPPORT * prm.h
-        try:
-            self.cell_start, nc0, nc1, nc2 = sp.bin_cells(st.pos, support, self.cell, self.order, self.cell_start)
-        except Exception as e:  # a particle far away: a grid too large to allocate
-            raise Instability(self.ctx.step, self.ctx.t, -1, f"neighbour search failed: {e}") from None
-        while True:
-            self._rows()
-            sp.run_pass(sp.fill_pairs, st.pos, self.spos, support, self.order, self.cell_start, nc0, nc1,
-                        nc2, prm.kernel_id, prm.h, self.start, self.caps, self.nb, self.w, self.g, self.counts,
-                        numba.get_num_threads())
-            if not np.any(self.counts > self.caps):
-                break
-            self.ctx.counters["dfsph_pair_overflows"] += 1  # a row overflowed: the walk again, rows from its counts
-        np.add(self.start, self.counts, out=self.end)
+        pl.fill(st)
         self._walls(wall_terms())
-        sp.run_pass(sp.summed_density, st.rho, self.start, self.end, self.nb, self.w, st.m, self.w0, self.inv_sigma,
+        sp.run_pass(sp.summed_density, st.rho, pl.start, pl.end, pl.nb, pl.w, st.m, self.w0, self.inv_sigma,
                     self.run.kept[KEPT]["wall_rho"])
-        sp.run_pass(sp.diagonal, self.alpha, self.start, self.end, self.nb, self.g, st.m, st.rho, self.grad, prm.rho0,
+        sp.run_pass(sp.diagonal, self.alpha, pl.start, pl.end, pl.nb, pl.g, st.m, st.rho, self.grad, prm.rho0,
                     self.inv_sigma)
-        self._listed.mark(st)
+        pl.mark.mark(st)
         self.ctx.counters["dfsph_pair_lists"] += 1
 
     def _walls(self, wall):

@@ -110,6 +110,12 @@ class SchemeBase:
     def _extra_arrays(self, n, dim):
         pass
 
+    def reorder_plan(self, forces):
+        """The permutation that puts the particles in cell order, or None when they are in it
+        (:meth:`sphcore.physics.forces.Forces.reorder_plan`; a scheme that bins the particles
+        itself gives its own)."""
+        return forces.reorder_plan(self.run.particles.pos)
+
     def permute(self, order):
         """Follow a reordering of the particles (the rates move with them): gathered into
         the scratch arrays, which then swap roles (no allocation)."""

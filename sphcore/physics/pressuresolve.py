@@ -57,7 +57,7 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     Jacobi weights, 0 for a particle the solve leaves alone. Returns (iterations, mean
     error); a solve not converged in ``scheme.max_iterations`` raises Instability."""
     st, rho0 = scheme.run.particles, scheme.ctx.params.rho0
-    rows = (scheme.start, scheme.end, scheme.nb, scheme.g)
+    rows = (scheme.pairs.start, scheme.pairs.end, scheme.pairs.nb, scheme.pairs.g)
     kr = scheme.kick_ratio  # kappa / rho of the kick, per particle (one division each, not one per pair)
     np.divide(kappa, st.rho, out=kr)
     sp.run_pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)

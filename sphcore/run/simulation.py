@@ -150,7 +150,7 @@ class Simulation:
     def reorder(self):
         """Sort particles by cell so that neighbours are near in memory (ids keep identity);
         nothing to do when they are in the kept pair list's order already."""
-        order = self.forces.reorder_plan(self.state.pos)
+        order = self.integrator.reorder_plan(self.forces)
         if order is None:
             return
         self.state.permute(order)
