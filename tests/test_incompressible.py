@@ -209,19 +209,33 @@ def _column_3d(dt, t_end):
 
 
 @pytest.mark.parametrize("dim", [2, 3])
-def test_a_dfsph_restart_continues_bit_for_bit(tmp_path, dim):
-    """A run stopped after 17 steps and restarted from its checkpoint ends as the run that
-    went through: a reorder is due at the restart's first step, where the run that went
-    through renumbers its pair list and the restarted one lists the pairs anew."""
+def test_a_dfsph_restart_continues_bit_for_bit(tmp_path, dim, monkeypatch):
+    """A run stopped after 27 steps and restarted from its checkpoint ends as the run that
+    went through. A reorder comes at the restart's first step (every 9 steps), where the
+    run that went through renumbers its pair list and the restarted one lists the pairs
+    anew: the restarted run's reorders are recorded to show it does reorder there."""
     from conftest import by_id, write_case
 
+    from sphcore.physics import incompressible
     from sphcore.run import runner
 
     dt = 2.0 ** -10
-    case_dir = write_case(tmp_path / "case", (_column if dim == 2 else _column_3d)(dt, 40 * dt))
+    case = (_column if dim == 2 else _column_3d)(dt, 40 * dt)
+    case["neighbours"]["sort_every"] = 9
+    case_dir = write_case(tmp_path / "case", case)
     full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
-    runner.run(case_dir, output=tmp_path / "part", t_end=17 * dt, quiet=True)  # a reorder is due at its first step
+    runner.run(case_dir, output=tmp_path / "part", t_end=27 * dt, quiet=True)
+    plan = incompressible.DivergenceFree.reorder_plan
+    reorders = []
+
+    def recorded(self, forces):
+        order = plan(self, forces)
+        reorders.append((self.ctx.step, order is not None))
+        return order
+
+    monkeypatch.setattr(incompressible.DivergenceFree, "reorder_plan", recorded)
     rest = runner.run(case_dir, output=tmp_path / "part", t_end=40 * dt, restart=True, quiet=True)
+    assert (27, True) in reorders
     a, b = full.simulation, rest.simulation
     assert a.step == b.step == 40
     sa, sb = by_id(a.state), by_id(b.state)

@@ -135,7 +135,7 @@ CORE: dict[str, dict[str, O]] = {
                         "pair list only if it was rebuilt since the last reorder)", positive=True),
         "skin": O(0.2, "float", doc="keep each particle's pair candidates within (1 + skin) 2h and reuse them until "
                   "a particle has moved skin h (Verlet lists; the same pairs, fewer searches); 0: search "
-                  "the cells at every force evaluation; dfsph lists its pairs every step and keeps none", min=0.0),
+                  "the cells at every force evaluation; dfsph keeps no Verlet list (it lists its pairs every step)", min=0.0),
     },
     "parallel": {
         "threads": O(0, "int", doc="most threads to use; 0: as many as numba uses when the run starts "

@@ -7,7 +7,8 @@ sound speed ten times faster than the flow. A step (Bender & Koschier 2017, Algo
 written around sphcore's step):
 
     rates:        a_np = g + viscosity + the walls' hydrostatic push  (pressure zero),
-                  summed over the pair list the last finish made at these positions
+                  summed over the pair list of these positions (the last finish's,
+                  renumbered after a reorder; listed here after a restore or restart)
     dt:           cfl h / |v|max, the force and viscous limits, dt_max, plugins' bounds
     free motion:  v* = v + dt a_np
                   density solve: kappa such that rho_i + dt D rho_i(v*) = rho0
@@ -199,8 +200,8 @@ class DivergenceFree(SchemeBase):
     def rates(self):
         """The non-pressure accelerations: the rates with zero pressure, summed over the
         solves' pair list of the current positions (:mod:`sphcore.physics.listedrates`; the
-        list is made here when a reorder or a new run left none), the walls' hydrostatic push
-        divided by lambda.
+        list is made here when a new run, a restart or a restored snapshot left none), the
+        walls' hydrostatic push divided by lambda.
 
         The SPH gradient of a linear pressure on the lattice is lambda times the exact one
         (``Params.moment_norm``, 0.974 in 2D at h = 1.3 dx), so water at rest holds itself

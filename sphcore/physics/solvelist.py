@@ -91,11 +91,15 @@ class SolveList:
 
     def permute(self, order):
         """Follow a reordering of the particles: particle k's row is the old row of
-        ``order[k]``, where it lies, its partners renumbered; the mark follows too."""
-        for a in (self.counts, self.start, self.end):
+        ``order[k]``, where it lies (the rows are no longer in particle order until the next
+        listing), its partners renumbered; the cells and the mark follow too."""
+        for a in (self.counts, self.start, self.end, self.cell):
             a[...] = a[order]
         self.new_index[order] = np.arange(order.shape[0])
         sp.run_pass(sp.renumber, self.start, self.end, self.nb, self.new_index)
+        # the cells' order in the new numbers (the identity after the list's own plan), so that
+        # a second reorder before the next listing (positions that did not change) finds none
+        self.order[...] = self.new_index[self.order]
         self.mark.permute(order)
 
     def _rows(self):

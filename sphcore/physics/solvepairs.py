@@ -192,8 +192,9 @@ def fill_pairs(pos, spos, support, order, cell_start, nc0, nc1, nc2, kid, h, sta
     incomplete. ``spos``: the positions in cell order (filled here). The particles of a cell
     share their candidates (:func:`_cell_pairs`: 1.8 times as fast as a walk of the cells
     around each particle, with the same rows, on the 3D dam break at 0.12 s on one thread).
-    Task t of ``nth`` (numba's thread count) takes every nth cell, with its own scratch; a
-    row depends on the positions and the particles' order only."""
+    Task t of ``nth`` (numba's thread count; any count >= 1 gives the same rows) takes every
+    nth cell, with its own scratch; a row depends on the positions and the particles' order
+    only."""
     n, dim = pos.shape
     ncell = nc0 * nc1 * nc2
     for k in prange(n):
@@ -202,7 +203,7 @@ def fill_pairs(pos, spos, support, order, cell_start, nc0, nc1, nc2, kid, h, sta
     most = 0
     for c in range(ncell):
         most = max(most, cell_start[c + 1] - cell_start[c])
-    bound = most * (27 if dim == 3 else 9)  # the candidates of a cell, at most
+    bound = min(most * (27 if dim == 3 else 9), n)  # the candidates of a cell, at most
     for t in prange(nth):
         cand = np.empty((dim, bound))
         ck = np.empty(bound, np.int64)

@@ -76,7 +76,8 @@ def sph_before_forces(ctx):
     Fires at the start of every force evaluation, after the equation of state and before
     extra sources and the neighbour search. May change ``ctx.force_pressure`` and ``ctx.state.rho``
     (e.g. hold free-surface particles at zero pressure, filter the density); must not move
-    particles.
+    particles. Under ``dfsph`` the pairs and the wall terms of the state may already have been
+    taken when it fires (the scheme lists its pairs before its rates).
     """
 
 

@@ -311,4 +311,4 @@ def kernels_cached(dim: int = 2) -> bool:
     (else the first step compiles it; the pair loop is built per dimension)."""
     from sphcore.physics import equations
 
-    return equations.compiled_on_disk(dim)
+    return equations.compiled_on_disk(dim)  # the run's first kernel; dfsph's are smaller
