@@ -279,20 +279,23 @@ class Forces:
                 self._buffers(st.n, st.n)
                 listed_rates(st.n, src, prm, wall, *listed, acc, drho, self._work[:st.n], self.completion)
                 counters["rates_from_pair_list"] += 1
-                self._count_terms(prm)
-                self.hook.sph_accelerations(ctx=ctx, acc=acc)
-                return
-            view = self.pair_view(src)
-            wall = self.wall_terms()
-            self._buffers(st.n, src.pos.shape[0])
-            if prm.kernel_gradient:
-                neighbour_sums(st.n, src, view, prm, True, self._L, False, self._shepard)
-                counters["kernel_gradient_correction"] += 1
-            n_src = src.pos.shape[0]
-            sph_rates(st.n, src, view, prm, self._L, wall, acc, drho, self._work[:n_src], self._spos[:n_src],
-                      numba.get_num_threads(), self.completion)
+            else:
+                self._walk_cells(src, prm, acc, drho)
             self._count_terms(prm)
         self.hook.sph_accelerations(ctx=ctx, acc=acc)
+
+    def _walk_cells(self, src, prm, acc, drho):
+        """The pair sums over the cells (or the kept Verlet list) of the sources."""
+        st, counters = self.ctx.state, self.ctx.counters
+        view = self.pair_view(src)
+        wall = self.wall_terms()
+        self._buffers(st.n, src.pos.shape[0])
+        if prm.kernel_gradient:
+            neighbour_sums(st.n, src, view, prm, True, self._L, False, self._shepard)
+            counters["kernel_gradient_correction"] += 1
+        n_src = src.pos.shape[0]
+        sph_rates(st.n, src, view, prm, self._L, wall, acc, drho, self._work[:n_src], self._spos[:n_src],
+                  numba.get_num_threads(), self.completion)
 
     def _listed_pairs(self, prm):
         """The scheme's pair list of the current state, when the rates can be summed over it

@@ -31,7 +31,7 @@ moved. Its rate is D rho_i = [sum_j m_j v_ij . grad W_ij +
 towards the particle at twice its normal velocity, as the wall's force is the image's
 (twice the particle's own pressure). With the same factor 2 in the rate as in the force, the
 pressure kick is the density rate's adjoint and each solve's operator is symmetric
-(``tests/test_incompressible.py``). With the factor 1 of the walls' share alone, the
+(``tests/test_solve_operator.py``). With the factor 1 of the walls' share alone, the
 operator was not: the wall terms then drove a circulation in water at rest (down the side
 walls, up the middle) that grew for as long as the run; the 3D tank's largest displacement
 from 1 s to 5 s was 9.9 dx, against 1.9 dx symmetric
@@ -159,7 +159,6 @@ class DivergenceFree(SchemeBase):
         self.no_walls = np.zeros((n, dim))  # the wall gradient of a run without wall terms
         self.no_flux = np.zeros(0)
         self.rho0_base = np.full(n, self.ctx.params.rho0)
-        self._walls_follow = False  # the walls' terms are to be taken in a new particle order
         st = self.run.particles
         kept = self.run.kept.setdefault(KEPT, {})
         for key in ("kappa", "kappa_v", "wall_rho"):
@@ -181,14 +180,13 @@ class DivergenceFree(SchemeBase):
         row of ``order[k]``, where it lies, its partners renumbered (a reorder comes at the
         start of a step, at the positions the last finish listed the pairs at: listing them
         again cost a fill, 37 of 395 in the 3D dam break). The walls' terms are taken again in
-        the new order at the next use."""
+        the new order at the next listing's check."""
         super().permute(order)
         kept = self.run.kept[KEPT]
         for key in ("kappa", "kappa_v", "wall_rho"):
             kept[key] = kept[key][order]
         self.alpha[...] = self.alpha[order]
         self.pairs.permute(order)
-        self._walls_follow = True
 
     def restored(self):
         """The pairs were listed at a state that was undone (the start-up probe's rates):
@@ -274,15 +272,12 @@ class DivergenceFree(SchemeBase):
 
     def _list_pairs(self, wall_terms):
         """The pairs, the summed density (into ``state.rho``), the diagonal and the
-        walls' terms of the current positions; nothing when they were listed there (the
-        walls' terms only, after a reorder)."""
+        walls' terms of the current positions; only the walls' terms when they were listed
+        there (the wall terms of the state, reused, or taken in a reorder's new order)."""
         st, prm, pl = self.run.particles, self.ctx.params, self.pairs
         if pl.mark.holds(st):
-            if self._walls_follow:
-                self._walls(wall_terms())
-                self._walls_follow = False
+            self._walls(wall_terms())
             return
-        self._walls_follow = False
         pl.fill(st)
         self._walls(wall_terms())
         sp.run_pass(sp.summed_density, st.rho, pl.start, pl.end, pl.nb, pl.w, st.m, self.w0, self.inv_sigma,

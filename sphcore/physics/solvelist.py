@@ -92,8 +92,9 @@ class SolveList:
     def permute(self, order):
         """Follow a reordering of the particles: particle k's row is the old row of
         ``order[k]``, where it lies (the rows are no longer in particle order until the next
-        listing), its partners renumbered; the cells and the mark follow too."""
-        for a in (self.counts, self.start, self.end, self.cell):
+        listing), its partners renumbered; the cells' order and the mark follow too (``cell``
+        is the binning's scratch, read by nothing after it)."""
+        for a in (self.counts, self.start, self.end):
             a[...] = a[order]
         self.new_index[order] = np.arange(order.shape[0])
         sp.run_pass(sp.renumber, self.start, self.end, self.nb, self.new_index)
