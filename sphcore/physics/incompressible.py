@@ -130,6 +130,7 @@ class DivergenceFree(SchemeBase):
         self.w0 = kernel_w(prm.kernel_id, 0.0, prm.h, prm.dim)
         self.full = self.sigma - prm.dx ** prm.dim * self.w0  # a full neighbourhood's sum_j V_j W_ij (self excluded)
         self.pairs = SolveList(prm, ctx)  # the pair list, listed at the positions pairs.mark holds
+        self.one_mass = None  # the particles' one mass at the last listing, None if they differ
         self.n_full = self.pairs.n_full  # a full neighbourhood's partners
         # the walls' hydrostatic push, scaled from the lattice's gradient to the solved one's
         self.push_excess = 1.0 / prm.moment_norm - 1.0
@@ -280,12 +281,19 @@ class DivergenceFree(SchemeBase):
             return
         pl.fill(st)
         self._walls(wall_terms())
-        sp.run_pass(sp.summed_density, st.rho, pl.start, pl.end, pl.nb, pl.w, st.m, self.w0, self.inv_sigma,
+        self.one_mass = sp.one_mass(st.m)
+        m = self.masses()
+        sp.run_pass(sp.summed_density, st.rho, pl.start, pl.end, pl.nb, pl.w, m, self.w0, self.inv_sigma,
                     self.run.kept[KEPT]["wall_rho"])
-        sp.run_pass(sp.diagonal, self.alpha, pl.start, pl.end, pl.nb, pl.g, st.m, st.rho, self.grad, prm.rho0,
+        sp.run_pass(sp.diagonal, self.alpha, pl.start, pl.end, pl.nb, pl.g, m, st.rho, self.grad, prm.rho0,
                     self.inv_sigma)
         pl.mark.mark(st)
         self.ctx.counters["dfsph_pair_lists"] += 1
+
+    def masses(self):
+        """The masses as the passes take them: the one mass of all the particles at the last
+        listing, else the array (:func:`sphcore.physics.solvepairs.one_mass`)."""
+        return self.run.particles.m if self.one_mass is None else self.one_mass
 
     def _walls(self, wall):
         """The wall gradient and velocity the solves use; the walls' part of the density

