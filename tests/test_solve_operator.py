@@ -182,3 +182,32 @@ def test_the_compression_error_counts_compression_only():
         sp.residual(z, err, base, rate, dt, rho0, kappa, alpha, 1.0, compression)
         assert err.tolist() == want
         assert z.tolist() == (e * alpha).tolist()  # the correction is the same either way
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_one_mass_gives_the_passes_of_the_mass_array_to_the_bit(dim):
+    """The passes take the particles' one mass as a float (no partner's mass read) and
+    otherwise the array: with all masses equal, the two give the same bits."""
+    rng = np.random.default_rng(11)
+    pos = rng.random((300 if dim == 2 else 500, dim)) * 0.2
+    h = 0.02
+    start, end, nb, w, g = _pairs(pos, h)
+    n = pos.shape[0]
+    m = np.full(n, 0.37)
+    assert sp.one_mass(m) == 0.37 and sp.one_mass(np.r_[m[:-1], 0.38]) is None
+    rho = rng.uniform(990.0, 1010.0, n)
+    vel = rng.normal(size=(n, dim))
+    grad = rng.normal(size=(n, dim)) * 10.0
+    kr = rng.random(n)
+    w0, inv_sigma = kernel_w(WENDLAND, 0.0, h, dim), 0.99
+    outs = []
+    for mass in (m, 0.37):
+        dens, alpha, rate, v = np.zeros(n), np.zeros(n), np.zeros(n), vel.copy()
+        sp.summed_density(dens, start, end, nb, w, mass, w0, inv_sigma, np.zeros(n))
+        sp.diagonal(alpha, start, end, nb, g, mass, rho, grad, 1000.0, inv_sigma)
+        sp.density_rate(rate, start, end, nb, g, mass, vel, grad, np.zeros(0), 1000.0, inv_sigma)
+        sp.pressure_kick(v, start, end, nb, g, mass, kr, grad, 1000.0, 1e-3)
+        outs.append((dens, alpha, rate, v))
+    for a, b in zip(*outs):
+        assert np.array_equal(a, b)
+    assert np.all(outs[0][0] > 0.0) and np.any(outs[0][2] != 0.0)

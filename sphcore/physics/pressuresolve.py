@@ -70,7 +70,8 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
     it = 0
     while True:
         sp.run_pass(sp.density_rate, scheme.rate, *rows, m, st.vel, scheme.grad, scheme.flux, rho0, scheme.inv_sigma)
-        sp.run_pass(sp.residual, z, err_i, base, scheme.rate, dt, rho0, kappa, alpha, scale, scheme.compression_only)
+        sp.particle_pass(sp.residual, z, err_i, base, scheme.rate, dt, rho0, kappa, alpha, scale,
+                         scheme.compression_only)
         err = float(err_i.sum()) / (n * rho0)
         if it >= min_it and err <= tol:
             return it, err
@@ -95,7 +96,6 @@ def solve(scheme, kappa, base, dt, tol, min_it, what, alpha):
             c_old, c_new = rn * rk, 2.0 * rn / delta
             rk = rn
         cycle += 1
-        sp.run_pass(sp.projected_step, d, z, kappa, c_old, c_new)
-        np.divide(d, st.rho, out=kr)
+        sp.particle_pass(sp.projected_step, d, z, kappa, c_old, c_new, st.rho, kr)
         sp.run_pass(sp.pressure_kick, st.vel, *rows, m, kr, scheme.grad, rho0, dt)
         it += 1

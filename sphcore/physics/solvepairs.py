@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit, prange, types
 from numba.extending import overload
 
-from sphcore.jit.parallel import on_threads_by_size
+from sphcore.jit.parallel import PARALLEL_MIN, on_threads_by_size
 from sphcore.physics.kernels import SUPPORT, kernel_f, kernel_w, lattice_nodes
 
 LIST_PARALLEL_MIN = 1000  # particles: the passes run on one thread below (a launch costs more)
@@ -62,9 +62,17 @@ def _mass_of(m, j):
 
 
 def run_pass(kernel, *args):
-    """Call one of this module's passes, on one thread below LIST_PARALLEL_MIN entries of
-    its first argument (the output: one entry per particle)."""
+    """Call one of this module's passes over the pairs, on one thread below LIST_PARALLEL_MIN
+    entries of its first argument (the output: one entry per particle)."""
     on_threads_by_size(args[0].shape[0], LIST_PARALLEL_MIN, kernel, *args)
+
+
+def particle_pass(kernel, *args):
+    """Call one of this module's passes over the particles alone (:func:`residual`,
+    :func:`projected_step`), on one thread below ``sphcore.jit.parallel.PARALLEL_MIN``
+    particles, where a parallel launch costs more than the work (the 3D dam break's 16,384
+    particles on two threads: 57 us a projected step in parallel, 17 us on one)."""
+    on_threads_by_size(args[0].shape[0], PARALLEL_MIN, kernel, *args)
 
 
 def lattice_sum(kernel_id: int, h: float, dx: float, dim: int) -> float:
@@ -365,10 +373,10 @@ def residual(z, err, base, rate, dt, rho0, kappa, alpha, scale, compression):
 
 
 @njit(cache=True, parallel=True)
-def projected_step(d, z, kappa, c_old, c_new):
+def projected_step(d, z, kappa, c_old, c_new, rho, kr):
     """d_i <- c_old d_i + c_new z_i, the step of a (Chebyshev-accelerated) Jacobi
     iteration, then projected: kappa_i <- max(kappa_i + d_i, 0) and d_i the change made
-    (the pressure never pulls)."""
+    (the pressure never pulls); kr_i = d_i / rho_i, the change the next kick applies."""
     for i in prange(d.shape[0]):
         step = c_old * d[i] + c_new * z[i]
         k = kappa[i] + step
@@ -376,6 +384,7 @@ def projected_step(d, z, kappa, c_old, c_new):
             k = 0.0
         d[i] = k - kappa[i]
         kappa[i] = k
+        kr[i] = d[i] / rho[i]
 
 
 @njit(cache=True, parallel=True)
