@@ -108,6 +108,8 @@ def test_a_falling_column_stays_in_the_box_near_rho0_and_spreads(tmp_path):
     assert 0.12 + 0.05 < front < 0.12 + 2.0 * np.sqrt(9.81 * 0.24) * 0.15
     fig = result.summary["dfsph"]
     assert fig["density_error_mean"] <= 1e-4 and fig["divergence_error_mean"] <= 1e-3
+    # numba cached its kernels: the next run does not say it compiles them
+    assert runner.kernels_cached(2, "dfsph")
 
 
 def test_droplets_that_collide_gain_no_energy(tmp_path):

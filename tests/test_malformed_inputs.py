@@ -290,10 +290,10 @@ def test_ctrl_c_during_set_up_is_one_line_and_writes_nothing(tmp_path, capsys, m
 
 def test_first_run_says_it_compiles(tmp_path, capsys, monkeypatch):
     case_dir = write_case(tmp_path / "case", GOOD_CASE)
-    monkeypatch.setattr("sphcore.run.runner.kernels_cached", lambda dim=2: False)
+    monkeypatch.setattr("sphcore.run.runner.kernels_cached", lambda dim=2, scheme="wcsph": False)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log")
     assert status == 0 and "[sph] compiling kernels, once" in err
-    monkeypatch.setattr("sphcore.run.runner.kernels_cached", lambda dim=2: True)
+    monkeypatch.setattr("sphcore.run.runner.kernels_cached", lambda dim=2, scheme="wcsph": True)
     status, _, err = cli_main(capsys, "run", case_dir, "--progress", "log", "--output", tmp_path / "again")
     assert status == 0 and "compiling" not in err
 
@@ -304,7 +304,8 @@ def test_the_cache_is_checked_before_the_first_force_evaluation_compiles(tmp_pat
     from sphcore.physics import forces
 
     events = []
-    monkeypatch.setattr("sphcore.run.runner.kernels_cached", lambda dim=2: events.append("checked") or False)
+    monkeypatch.setattr("sphcore.run.runner.kernels_cached",
+                        lambda dim=2, scheme="wcsph": events.append("checked") or False)
     evaluate = forces.Forces.evaluate
     monkeypatch.setattr(forces.Forces, "evaluate", lambda self, *a, **k: events.append("forces") or evaluate(self, *a, **k))
     case_dir = write_case(tmp_path / "case", GOOD_CASE)

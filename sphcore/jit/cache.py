@@ -76,6 +76,13 @@ def cache_dirs(files) -> list[Path]:
     return out
 
 
+def on_disk(source, pattern: str) -> bool:
+    """Whether numba's disk cache holds an index file matching ``pattern`` (e.g.
+    ``"equations._sph_rates_2d*.nbi"``) of a function defined in the file ``source``,
+    wherever numba may keep it (:func:`cache_dirs`)."""
+    return any(any(d.glob(pattern)) for d in cache_dirs([Path(source).resolve()]) if d.is_dir())
+
+
 def remove_caches(dirs) -> int:
     """Remove numba's cache files from ``dirs``; returns how many. Errors are skipped."""
     removed = 0

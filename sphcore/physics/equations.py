@@ -389,10 +389,7 @@ _RATES = {(dim, None): _build(dim) for dim in (2, 3)}
 def compiled_on_disk(dim: int) -> bool:
     """Whether numba's on-disk cache holds the pair loop of a ``dim``-dimensional run (else
     the first force evaluation compiles it), wherever numba may keep it
-    (:func:`sphcore.jit.cache.cache_dirs`)."""
-    from pathlib import Path
+    (:func:`sphcore.jit.cache.on_disk`)."""
+    from sphcore.jit.cache import on_disk
 
-    from sphcore.jit.cache import cache_dirs
-
-    return any(any(d.glob(f"equations._sph_rates_{dim}d*.nbi")) for d in cache_dirs([Path(__file__).resolve()])
-               if d.is_dir())
+    return on_disk(__file__, f"equations._sph_rates_{dim}d*.nbi")

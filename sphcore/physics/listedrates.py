@@ -128,3 +128,14 @@ def listed_rates(n, src, prm, wall, start, end, nb, w, g, acc, drho, work, compl
     if fn is None:
         fn = _BUILT[key] = _build(dim, key[1])
     fn(n, src, prm, wall, start, end, nb, w, g, acc, drho, work)
+
+
+def compiled_on_disk(dim: int) -> bool:
+    """Whether numba's on-disk cache holds the rates over the pair list of a
+    ``dim``-dimensional run and the pair list's fill (else a divergence-free run's first
+    step compiles them)."""
+    from sphcore.jit.cache import on_disk
+    from sphcore.physics import solvepairs
+
+    return (on_disk(__file__, f"listedrates._listed_rates_{dim}d*.nbi")
+            and on_disk(solvepairs.__file__, "solvepairs.fill_pairs-*.nbi"))

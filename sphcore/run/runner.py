@@ -172,7 +172,7 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
             resume.verify(saved, case, out, out / checkpoint.NAME)
         # sizing the first step below evaluates the forces: that compiles the force kernels on a
         # fresh machine (said before it starts; checked after it, the cache would always hold them)
-        if mode != "off" and not kernels_cached(case.config["case"]["dim"]):
+        if mode != "off" and not kernels_cached(case.config["case"]["dim"], case.config["scheme"]["name"]):
             print("[sph] compiling kernels, once (about 10 s; later runs load them from the cache)",
                   file=sys.stderr, flush=True)
         if mode != "off" and not restart and case.config["relax"]["time"] > 0:
@@ -306,9 +306,15 @@ def run(case_dir, output=None, overrides=(), t_end=None, overwrite=False, restar
     return RunResult(summary["status"], summary["message"], summary, sim, stop.get("stopped_by"))
 
 
-def kernels_cached(dim: int = 2) -> bool:
-    """Whether numba's cache holds the force kernel of a ``dim``-dimensional run already
-    (else the first step compiles it; the pair loop is built per dimension)."""
+def kernels_cached(dim: int = 2, scheme: str = "wcsph") -> bool:
+    """Whether numba's cache holds the largest kernels of a ``dim``-dimensional run of
+    ``scheme`` already (else the first step compiles them): the weakly compressible pair
+    loop, or the divergence-free scheme's rates over its pair list and the list's fill
+    (built per dimension; a dfsph run with the wall model never walks the cells)."""
+    if scheme == "dfsph":
+        from sphcore.physics import listedrates
+
+        return listedrates.compiled_on_disk(dim)
     from sphcore.physics import equations
 
-    return equations.compiled_on_disk(dim)  # the run's first kernel; dfsph's are smaller
+    return equations.compiled_on_disk(dim)
