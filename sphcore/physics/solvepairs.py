@@ -42,7 +42,7 @@ LIST_PARALLEL_MIN = 1000  # particles: the passes run on one thread below (a lau
 def one_mass(m):
     """The mass every particle has (the cases' fluids), or None when they differ. The passes
     take ``m`` as that one float then, else as the array (:func:`mass_of`): with one mass
-    they read no partner's mass, and the density rate and the pressure kick took 0.82 and
+    they read no partner's mass, and the density rate and the pressure kick took 0.83 and
     0.87 of the time (the 3D dam break's state at 0.12 s, one thread), with the same bits."""
     if m.shape[0] and np.all(m == m[0]):
         return float(m[0])
