@@ -20,6 +20,7 @@ def test_dfsph_refuses_the_keys_it_cannot_honour(tmp_path):
                               ("corrections.shepard_every", 5, "corrections.shepard_every"),
                               ("physics.sph", False, "scheme.name"),
                               ("plugins.use", ["ghost", "reflective"], "plugins.use"),
+                              ("plugins.use", ["reflective", "free_surface"], "plugins.use"),
                               ("bodies", [{"wall": 0, "density": 500.0}], "bodies")]:
         with pytest.raises(Exception) as err:
             run_case(tmp_path / key, case_with(base, {key: value}))
