@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sphcore.physics import pairfill as pf
 from sphcore.physics import solvepairs as sp
 from sphcore.physics.kernels import KERNEL_IDS, SUPPORT, kernel_f, kernel_w, lattice_nodes
 
@@ -21,14 +22,14 @@ def _pairs(pos, h, kid=WENDLAND, cap=4):
     n, dim = pos.shape
     support = SUPPORT * h
     cell, order = np.zeros(n, np.int64), np.zeros(n, np.int64)
-    cell_start, nc0, nc1, nc2 = sp.bin_cells(pos, support, cell, order, np.zeros(1, np.int64))
+    cell_start, nc0, nc1, nc2 = pf.bin_cells(pos, support, cell, order, np.zeros(1, np.int64))
     counts = np.zeros(n, np.int64)
     caps = np.full(n, cap, np.int64)
     start = np.zeros(n, np.int64)
     while True:
-        size = sp.row_starts(caps, start)
+        size = pf.row_starts(caps, start)
         nb, w, g = np.zeros(size, np.int32), np.zeros(size), np.zeros((size, dim))
-        sp.fill_pairs(pos, np.zeros_like(pos), support, order, cell_start, nc0, nc1, nc2, kid, h, start, caps,
+        pf.fill_pairs(pos, np.zeros_like(pos), support, order, cell_start, nc0, nc1, nc2, kid, h, start, caps,
                       nb, w, g, counts, 2)
         if np.all(counts <= caps):
             return start, start + counts, nb, w, g

@@ -135,7 +135,7 @@ def compiled_on_disk(dim: int) -> bool:
     ``dim``-dimensional run and the pair list's fill (else a divergence-free run's first
     step compiles them)."""
     from sphcore.jit.cache import on_disk
-    from sphcore.physics import solvepairs
+    from sphcore.physics import pairfill
 
     return (on_disk(__file__, f"listedrates._listed_rates_{dim}d*.nbi")
-            and on_disk(solvepairs.__file__, "solvepairs.fill_pairs-*.nbi"))
+            and on_disk(pairfill.__file__, "pairfill.fill_pairs-*.nbi"))

@@ -1,9 +1,9 @@
 """The incompressible scheme's pair list as one object: its rows, the cells it was binned
 into, the state it was listed at, and how it follows a reordering of the particles.
 
-The kernels that build and walk the list are in :mod:`sphcore.physics.solvepairs`; what
-the scheme derives from it (the summed density, the diagonal, the walls' terms) is in
-:mod:`sphcore.physics.incompressible`.
+The kernels that build the list are in :mod:`sphcore.physics.pairfill`, those that walk it
+in :mod:`sphcore.physics.solvepairs`; what the scheme derives from it (the summed density,
+the diagonal, the walls' terms) is in :mod:`sphcore.physics.incompressible`.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import numba
 import numpy as np
 
 from sphcore.errors import Instability
+from sphcore.physics import pairfill as pf
 from sphcore.physics import solvepairs as sp
 from sphcore.physics.kernels import SUPPORT, lattice_nodes
 from sphcore.physics.particles import StateMark
@@ -57,7 +58,7 @@ class SolveList:
         """The particles binned into cells of the support's size (``cell``, ``order``,
         ``cell_start``); returns the cells per axis."""
         try:
-            self.cell_start, nc0, nc1, nc2 = sp.bin_cells(st.pos, SUPPORT * self.prm.h, self.cell, self.order,
+            self.cell_start, nc0, nc1, nc2 = pf.bin_cells(st.pos, SUPPORT * self.prm.h, self.cell, self.order,
                                                           self.cell_start)
         except Exception as e:  # a particle far away: a grid too large to allocate
             raise Instability(self.ctx.step, self.ctx.t, -1, f"neighbour search failed: {e}") from None
@@ -69,7 +70,7 @@ class SolveList:
         nc0, nc1, nc2 = self.bin(st)
         while True:
             self._rows()
-            sp.run_pass(sp.fill_pairs, st.pos, self.spos, SUPPORT * self.prm.h, self.order, self.cell_start, nc0, nc1,
+            sp.run_pass(pf.fill_pairs, st.pos, self.spos, SUPPORT * self.prm.h, self.order, self.cell_start, nc0, nc1,
                         nc2, self.prm.kernel_id, self.prm.h, self.start, self.caps, self.nb, self.w, self.g,
                         self.counts, numba.get_num_threads())
             if not np.any(self.counts > self.caps):
@@ -97,7 +98,7 @@ class SolveList:
         for a in (self.counts, self.start, self.end):
             a[...] = a[order]
         self.new_index[order] = np.arange(order.shape[0])
-        sp.run_pass(sp.renumber, self.start, self.end, self.nb, self.new_index)
+        sp.run_pass(pf.renumber, self.start, self.end, self.nb, self.new_index)
         # the cells' order in the new numbers (the identity after the list's own plan), so that
         # a second reorder before the next listing (positions that did not change) finds none
         self.order[...] = self.new_index[self.order]
@@ -105,9 +106,9 @@ class SolveList:
 
     def _rows(self):
         """Each particle's row sized to its partners at the last listing and ROW_ROOM more
-        (:func:`sphcore.physics.solvepairs.row_starts`); the list's arrays grow when short."""
+        (:func:`sphcore.physics.pairfill.row_starts`); the list's arrays grow when short."""
         np.add(self.counts, self.room, out=self.caps)
-        size = sp.row_starts(self.caps, self.start)
+        size = pf.row_starts(self.caps, self.start)
         if self.nb.shape[0] < size:
             size += size // 8
             self.nb = np.zeros(size, np.int32)
