@@ -32,6 +32,12 @@ class FreeSurfacePlugin:
         cfg = case.config["free_surface"]
         if not case.config["physics"]["sph"]:
             raise CaseError(case.file, "plugins.use", "free_surface needs physics.sph = true")
+        if case.config["scheme"]["name"] == "dfsph":
+            # the surface is held in the rates' pressure, which dfsph does not read: its solves
+            # would still give those particles a pressure
+            raise CaseError(case.file, "plugins.use", "free_surface sets the equation of state's pressure, which dfsph "
+                            "does not use (its solves keep the free surface at zero pressure themselves): remove it "
+                            "with scheme.name = \"dfsph\"")
         self.threshold = cfg["threshold"] or (1.5 if case.dim == 2 else 2.4)
         self.mirror = cfg["mirror_walls"]
         self.normals = np.ascontiguousarray(case.planes.normals)

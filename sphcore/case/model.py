@@ -324,10 +324,4 @@ def _check_incompressible(file, cfg) -> None:
     if cfg["bodies"]:
         raise CaseError(file, "bodies", "floating bodies are not coupled to dfsph's solves (their loads would miss the "
                         "solved pressure): use scheme.name = \"wcsph\"")
-    if "free_surface" in cfg["plugins"]["use"]:
-        # the plugin holds surface particles at the Tait pressure's zero (p = 0, rho = rho0) in the
-        # rates' pressure, which dfsph does not read: its solves would still give them a pressure
-        raise CaseError(file, "plugins.use", "free_surface sets the equation of state's pressure, which dfsph does not "
-                        "use (its solves keep the free surface at zero pressure themselves): remove it with "
-                        "scheme.name = \"dfsph\"")
 
