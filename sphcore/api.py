@@ -49,7 +49,7 @@ from sphcore.io.writer import ScheduledWriter, check_series, leading_complete, n
 from sphcore.jit.parallel import by_size, on_threads_by_size
 from sphcore.neighbours.cellgrid import CellGrid, Grid, cell_of, cell_range
 from sphcore.physics import eos
-from sphcore.physics.loads import tank_load
+from sphcore.physics.loads import impulse_load, tank_load
 from sphcore.physics.equations import WallTerms
 from sphcore.physics.kernels import CUBIC_SPLINE, KERNEL_IDS, SUPPORT, WENDLAND_C2, kernel_f, kernel_w
 from sphcore.physics.params import Params
@@ -61,7 +61,7 @@ from sphcore.plugin.hookspecs import hookimpl
 __all__ = [
     "hookimpl", "Option", "CaseError", "Instability", "OutputError",
     "RunContext", "Params", "ParticleState", "Sources", "Fields", "WallTerms", "FLUID", "SPHERE", "GHOST",
-    "Planes", "plane_distance", "particle_distance", "normal_parts", "outline", "Motion", "MovingGroup", "Pose", "plane_groups", "planes_at", "tank_load",
+    "Planes", "plane_distance", "particle_distance", "normal_parts", "outline", "Motion", "MovingGroup", "Pose", "plane_groups", "planes_at", "tank_load", "impulse_load",
     "rotation_vector",
     "Faces", "FaceGrid", "build_grid", "cell_span", "box_cells", "nearest_point", "nearest_feature", "face_distance",
     "first_contact",

@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphcore.api import CaseError, Option, hookimpl, on_threads_by_size, tank_load
+from sphcore.api import CaseError, Option, hookimpl, impulse_load, on_threads_by_size, tank_load
 
 
 class WallIntegralPlugin:
@@ -195,11 +195,27 @@ class WallIntegralPlugin:
         if self.tank is not None:  # every wall the tank's: the exact momentum balance
             force, moment = tank_load(ctx, self.tank, pos0, acc)
             ctx.add_wall_load(self.tank.name, force * dt, moment * dt)
+            self._solved_tank_load(ctx, pos0)  # dfsph: its density solve's walls
             return
         dim = ctx.params.dim
         for name, row in ctx.kept(self).get("loads", {}).items():
             force, moment = np.asarray(row[:dim]), np.asarray(row[dim:])
             ctx.add_wall_load(name, force * dt, moment * dt)
+
+    @hookimpl
+    def sph_after_step(self, ctx):
+        """dfsph: the tank's load of the divergence solve that closed the step."""
+        if self.tank is not None:
+            self._solved_tank_load(ctx, ctx.state.pos)
+
+    def _solved_tank_load(self, ctx, pos):
+        """The tank's part of a solved pressure (``ctx.solved_impulse``, set by a scheme that
+        solves for its pressure after each solve; the rates, and so :func:`tank_load`, hold
+        none of it): the opposite of what its walls gave the fluid, at the positions of the
+        solve."""
+        if ctx.solved_impulse is not None:
+            impulse, angular = impulse_load(ctx, self.tank, pos, ctx.solved_impulse)
+            ctx.add_wall_load(self.tank.name, impulse, angular)
 
     def _load_coefs(self, ctx):
         """(2 m p / rho, m lambda (rho - rho_ref) / rho) per particle: the coefficients of G and

@@ -160,6 +160,7 @@ class DivergenceFree(SchemeBase):
         self.no_walls = np.zeros((n, dim))  # the wall gradient of a run without wall terms
         self.no_flux = np.zeros(0)
         self.rho0_base = np.full(n, self.ctx.params.rho0)
+        self.impulse = np.zeros((n, dim))  # the walls' impulse of the last solve (ctx.solved_impulse)
         st = self.run.particles
         kept = self.run.kept.setdefault(KEPT, {})
         for key in ("kappa", "kappa_v", "wall_rho"):
@@ -235,6 +236,7 @@ class DivergenceFree(SchemeBase):
         np.maximum(smooth, 0.0, out=kept["kappa"])
         n_it, err = self._solve(kept["kappa"], st.rho, dt, self.tol_density, 2, "density")
         self._record("density", n_it, err)
+        self._wall_impulse(kept["kappa"], dt)
         self.pos0[...] = st.pos
         np.multiply(st.vel, dt, out=self.kick)
         st.pos += self.kick
@@ -257,6 +259,7 @@ class DivergenceFree(SchemeBase):
         n_it, err = self._solve(kept["kappa_v"], self.rho0_base, dt, self.tol_divergence, 1, "divergence",
                                 self.alpha_v)
         self._record("divergence", n_it, err)
+        self._wall_impulse(kept["kappa_v"], dt)
         np.multiply(st.rho, kept["kappa"], out=st.p)
         self.run.rates.fresh = False
         return False
@@ -345,6 +348,21 @@ class DivergenceFree(SchemeBase):
         ``alpha`` the Jacobi weights, the diagonal's inverse by default. Returns (iterations,
         mean error)."""
         return pressuresolve.solve(self, kappa, base, dt, tol, min_it, what, self.alpha if alpha is None else alpha)
+
+    def _wall_impulse(self, kappa, dt):
+        """``ctx.solved_impulse``: the walls' impulse on each particle through the solve just
+        made, when walls move (their loads add its opposite). The solve's kicks of the warm
+        start and of each change sum to its kappa, so their walls' part is
+        -dt m_i 2 rho0 (kappa_i / rho_i) G_i (the mirror image's push, module docstring); the
+        pair terms are equal and opposite and give the walls nothing."""
+        if not getattr(self.ctx.case, "moving", ()):
+            return
+        st, kr = self.run.particles, self.kick_ratio  # the solve's scratch, free again
+        np.divide(kappa, st.rho, out=kr)
+        kr *= st.m
+        kr *= -2.0 * self.ctx.params.rho0 * dt
+        np.multiply(self.grad, kr[:, None], out=self.impulse)
+        self.ctx.solved_impulse = self.impulse
 
     def _record(self, what, n_it, err):
         """The solves' figures in summary.json (under "dfsph"): iterations a step, the

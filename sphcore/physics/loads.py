@@ -11,6 +11,10 @@ wall moves as one) is its opposite, exactly, with its moment about the tank's ce
 rotation. Reflective contacts act outside the forces and add their own impulses. With the
 kernel gradient correction the pair forces are not antisymmetric and the load carries that
 scheme's momentum error too.
+
+A scheme that solves for its pressure (dfsph) gives the particles the walls' part of that
+pressure outside the rates, as kicks (``ctx.solved_impulse``): the tank's load adds their
+opposite, with its moment (:func:`impulse_load`).
 """
 
 from __future__ import annotations
@@ -56,3 +60,20 @@ def tank_load(ctx, group, pos0, acc):
     out = np.zeros(6)
     wall_reaction(pos0, acc, st.m, st.rho, g, float(prm.rho_ref), origin, out)
     return out[:dim], out[3:]
+
+
+def impulse_load(ctx, group, pos, impulse):
+    """(impulse (dim,), angular impulse (3,), about z in 2D) the fluid gave ``group``, a moving
+    group that holds every wall, when the walls gave the particles at ``pos`` the momenta
+    ``impulse`` (n, dim; N s): their opposite, summed, and its moment about the group's
+    centre of rotation where it is at ``ctx.t``."""
+    dim = ctx.params.dim
+    pose = group.motion.pose(ctx.t)
+    arm = pos - np.asarray(pose.centre + pose.shift, np.float64)[:dim]
+    total = -impulse.sum(axis=0)
+    angular = np.zeros(3)
+    if dim == 2:
+        angular[2] = -float((arm[:, 0] * impulse[:, 1] - arm[:, 1] * impulse[:, 0]).sum())
+    else:
+        angular[:] = -np.cross(arm, impulse).sum(axis=0)
+    return total, angular

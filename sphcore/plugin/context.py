@@ -51,6 +51,11 @@ Every hook that acts during a run receives ``ctx``, a :class:`RunContext`:
 ``ctx.wall_members``  {group: (particle indices, weights)}: the particles a floating
                       body's faces completed at the last evaluation and the body's share
                       of each one's wall terms.
+``ctx.solved_impulse`` (n, dim) or None: the momentum (N s) the walls gave each particle
+                      through the pressure of the scheme's last solve, which the rates do
+                      not hold (dfsph: the density solve's in ``sph_after_integrate``, the
+                      divergence solve's in ``sph_after_step``); None with wcsph, whose
+                      wall pressure is in the rates.
 ====================  ===================================================================
 
 The context is a view of the run state (:class:`sphcore.run.state.RunState`, ``ctx.run``),
@@ -98,6 +103,9 @@ class RunContext:
         #: {group: (particle indices, weights)}: the particles a floating body's walls completed
         #: at the last evaluation of the rates and the body's share of each one's wall terms
         self.wall_members: dict[str, tuple] = {}
+        #: the walls' impulse on each particle through the last solve's pressure (a scheme that
+        #: solves for it sets it), None when the rates hold the walls' whole pressure
+        self.solved_impulse: np.ndarray | None = None
 
     # -- the run state, by name ---------------------------------------------------------
 
