@@ -66,6 +66,7 @@ class WallIntegralPlugin:
         self.bodies = set()
         self._faces = None
         self._epoch = 0
+        self._solved_parts = {}  # {group: [(indices, G_k, G)]}: see _solved_loads
 
     @hookimpl
     def sph_options(self):
@@ -152,20 +153,29 @@ class WallIntegralPlugin:
                                offsets, prm.kernel_id, prm.h, prm.gravity, *self._table, prm.support,
                                prm.moment_norm, terms.share, terms.grad, terms.hydro, terms.fill, terms.normals)
         loads = {}
+        # a scheme that solves for its pressure (ctx.solved_impulse): each group's part of the
+        # wall gradient of the particles it reaches, to split the solves' wall kicks by group
+        solving = ctx.solved_impulse is not None
+        parts = {}
         for g in self.plane_groups:
             if count:
                 loads[g.name] = self._plane_group_terms(ctx, terms, count, g, normals, offsets)
+                if solving and g is not self.tank:
+                    parts[g.name] = [self._plane_group_parts(ctx, terms, count, g, normals, offsets)]
         if self.walls is not None:
             if self._fixed is None or len(self._fixed):
                 self._add_face_terms(ctx, terms)
             members = {}
             for k, g in enumerate(self.face_groups):
-                near = self._near_body(ctx, k, g) if g.name in self.bodies else None
+                reached = g.name in self.bodies or (solving and g is not self.tank)
+                near = self._near_body(ctx, k, g) if reached else None
                 before = terms.grad[near] if near is not None else None
                 force, moment = self._moving_face_terms(ctx, terms, k, g)
-                if near is not None:  # the particles this body's faces reach, and by how much
+                if near is not None and g.name in self.bodies:  # the particles this body's faces reach, and by how much
                     part = np.sqrt(((terms.grad[near] - before) ** 2).sum(axis=1))
                     members[g.name] = (near, part)
+                elif near is not None:
+                    parts.setdefault(g.name, []).append((near, terms.grad[near] - before))
                 if g.name in loads:  # the tank's walls: its planes and faces together
                     force, moment = force + loads[g.name][0], moment + loads[g.name][1]
                 loads[g.name] = (force, moment)
@@ -180,6 +190,8 @@ class WallIntegralPlugin:
         for name, (force, moment) in loads.items():
             if name not in self.bodies:  # a body's load is the exact reaction (the run sums it)
                 ctx.set_wall_force(name, force, moment)
+        # each part with the whole gradient it is a part of (the solves kick along that)
+        self._solved_parts = {name: [(idx, k, terms.grad[idx]) for idx, k in found] for name, found in parts.items()}
         if self.plane_groups or self.face_groups:  # kept for the next step's load (restart too)
             ctx.kept(self)["loads"] = {name: [float(v) for v in f] + [float(v) for v in m]
                                        for name, (f, m) in loads.items() if name not in self.bodies}
@@ -201,12 +213,13 @@ class WallIntegralPlugin:
         for name, row in ctx.kept(self).get("loads", {}).items():
             force, moment = np.asarray(row[:dim]), np.asarray(row[dim:])
             ctx.add_wall_load(name, force * dt, moment * dt)
+        self._solved_loads(ctx, pos0)  # dfsph: its density solve's walls
 
     @hookimpl
     def sph_after_step(self, ctx):
-        """dfsph: the tank's load of the divergence solve that closed the step."""
-        if self.tank is not None:
-            self._solved_tank_load(ctx, ctx.state.pos)
+        """dfsph: the moving groups' loads of the divergence solve that closed the step."""
+        if self.plane_groups or self.face_groups:
+            self._solved_loads(ctx, ctx.state.pos)
 
     def _solved_tank_load(self, ctx, pos):
         """The tank's part of a solved pressure (``ctx.solved_impulse``, set by a scheme that
@@ -216,6 +229,38 @@ class WallIntegralPlugin:
         if ctx.solved_impulse is not None:
             impulse, angular = impulse_load(ctx, self.tank, pos, ctx.solved_impulse)
             ctx.add_wall_load(self.tank.name, impulse, angular)
+
+    def _solved_loads(self, ctx, pos):
+        """Each moving group's part of a solved pressure (``ctx.solved_impulse``) at the
+        positions of the solve, which are those of the last wall terms: the kick of particle
+        i is a multiple c_i of its wall gradient G_i, and the group's share is c_i G_k,i with
+        G_k,i the group's part of G_i (taken with the terms, :meth:`sph_wall_terms`)."""
+        j = ctx.solved_impulse
+        if j is None:
+            return
+        if self.tank is not None:
+            self._solved_tank_load(ctx, pos)
+            return
+        groups = {g.name: g for g in self.plane_groups + self.face_groups}
+        for name, found in self._solved_parts.items():
+            for idx, k, grad in found:
+                norm = (grad * grad).sum(axis=1)
+                c = np.divide((j[idx] * grad).sum(axis=1), norm, out=np.zeros(idx.shape[0]), where=norm > 0.0)
+                impulse, angular = impulse_load(ctx, groups[name], pos[idx], c[:, None] * k)
+                ctx.add_wall_load(name, impulse, angular)
+
+    def _plane_group_parts(self, ctx, terms, count, group, normals, offsets):
+        """(indices, G_k) of the particles near a plane: the group's part of their wall
+        gradient (:func:`.moving.group_parts`)."""
+        from .moving import group_parts
+
+        st, prm = ctx.state, ctx.params
+        member = np.zeros(normals.shape[0], np.bool_)
+        member[group.planes] = True
+        idx = self._near[:count].copy()
+        k = np.zeros((count, prm.dim))
+        group_parts(idx, count, st.pos, normals, offsets, member, prm.support, terms.grad, k)
+        return idx, k
 
     def _load_coefs(self, ctx):
         """(2 m p / rho, m lambda (rho - rho_ref) / rho) per particle: the coefficients of G and

@@ -21,7 +21,10 @@ outside first moment of minus the wall's acceleration a_w = D'' + alpha x r + Om
 (Omega x r) at the particle (the moment integral evaluated with -a_w in place of g).
 
 A tank holding every wall takes its load from the fluid's momentum balance, exactly
-(:func:`sphcore.api.tank_load`). Otherwise (a piston, a paddle among fixed walls) the load
+(:func:`sphcore.api.tank_load`), and a solved pressure's part from the walls' kicks
+(``ctx.solved_impulse``, :func:`sphcore.api.impulse_load`); another group takes that part
+as its share of each kick, the kick's multiple of G written with the group's part G_k of G
+(:func:`group_parts`, or the gradient its faces added). Otherwise (a piston, a paddle among fixed walls) the load
 the fluid puts on the group is the reaction of the completion's terms of its
 walls, F = sum_i m_i (2 (p_i / rho_i) G_k,i + ((rho_i - rho_ref)/rho_i) lambda A_k,i (g - a_w))
 over the particles near it, with the exact first moment A_k (g - a_w) = T_k (g - a_w) +
@@ -193,6 +196,25 @@ def plane_group_terms(idx, count, pos, normals, offsets, member, own_normals, ow
                 A1 = nn * own_normals[0, 1]
                 A2 = nn * own_normals[0, 2] if dim == 3 else 0.0
             _add_load(load, b, dim, x0, x1, x2, origin, coef_p[i], coef_h[i], k0, k1, k2, A0, A1, A2)
+
+
+@njit(cache=True)
+def group_parts(idx, count, pos, normals, offsets, member, support, grad, out):
+    """out[t] <- G_k, the part of particle idx[t]'s wall gradient ``grad`` that belongs to
+    the planes with member[a] (:func:`_group_part`, as :func:`plane_group_terms` takes it),
+    for the particles idx[:count]: what a solved pressure's walls kick (the load of a scheme
+    that solves for its pressure, ``ctx.solved_impulse``) splits into by group."""
+    dim = pos.shape[1]
+    for t in range(count):
+        i = idx[t]
+        x2 = pos[i, 2] if dim == 3 else 0.0
+        G2 = grad[i, 2] if dim == 3 else 0.0
+        k0, k1, k2 = _group_part(pos[i, 0], pos[i, 1], x2, dim, normals, offsets, member, support, grad[i, 0],
+                                 grad[i, 1], G2)
+        out[t, 0] = k0
+        out[t, 1] = k1
+        if dim == 3:
+            out[t, 2] = k2
 
 
 @njit(cache=True, parallel=True)

@@ -161,6 +161,8 @@ class DivergenceFree(SchemeBase):
         self.no_flux = np.zeros(0)
         self.rho0_base = np.full(n, self.ctx.params.rho0)
         self.impulse = np.zeros((n, dim))  # the walls' impulse of the last solve (ctx.solved_impulse)
+        if getattr(self.ctx.case, "moving", ()):  # walls that move: their loads take it from the start
+            self.ctx.solved_impulse = self.impulse
         st = self.run.particles
         kept = self.run.kept.setdefault(KEPT, {})
         for key in ("kappa", "kappa_v", "wall_rho"):
