@@ -141,3 +141,44 @@ def test_the_loads_on_a_carried_tank_balance_the_momentum_of_its_water(tmp_path)
     assert s["max_force"] >= 0.95 * mass * 9.81
     text = (out / "wall_loads.csv").read_text().splitlines()
     assert text[1].startswith("t,domain.motion.Fx") and len(text) == 2 + len(t)
+
+
+def test_a_dfsph_run_s_loads_on_a_rolling_tank_and_its_paddle_continue_bit_for_bit_after_a_restart(tmp_path):
+    """The rolling tank with its swinging paddle (two groups: the tank's planes and the
+    paddle's faces, so each takes its share of the solves' wall kicks), dfsph with the wall
+    model and a fixed step, stopped after 27 steps and restarted from its checkpoint: the
+    particles and every row of wall_loads.nc that the stop did not cut are those of the run
+    that went through, bit for bit (the groups' parts of the wall gradient are taken again
+    at the restart's first listing, at the same positions), and the row it cut in two (the
+    stopped run writes its last row at step 27) holds the same impulse over the same time."""
+    dt = 2.0 ** -10
+    case_dir = _case(tmp_path, "case", {"scheme.name": "dfsph", "time.dt": dt, "time.t_end": 40 * dt,
+                                        "blocks[0].max": [0.7, 0.15],  # the water against the paddle
+                                        "plugins.use": ["reflective", "wall_integral", "wall_loads"],
+                                        "wall_loads.every_steps": 4, "neighbours.sort_every": 9})
+    full = runner.run(case_dir, output=tmp_path / "full", quiet=True)
+    assert full["status"] == "completed", full["message"]
+    runner.run(case_dir, output=tmp_path / "part", t_end=27 * dt, quiet=True)
+    rest = runner.run(case_dir, output=tmp_path / "part", t_end=40 * dt, restart=True, quiet=True)
+    assert rest["status"] == "completed", rest["message"]
+    assert full.simulation.step == rest.simulation.step == 40
+    (_, final), (_, want) = checkpoint_by_id(tmp_path / "part"), checkpoint_by_id(tmp_path / "full")
+    for key in ("id", "pos", "vel", "rho", "p"):
+        assert np.array_equal(final[key], want[key]), key
+    with netCDF4.Dataset(tmp_path / "full" / "wall_loads.nc") as x, \
+            netCDF4.Dataset(tmp_path / "part" / "wall_loads.nc") as y:
+        steps, rows = np.asarray(x["step"][:]), np.asarray(y["step"][:])
+        assert steps.tolist() == list(range(0, 41, 4))  # step 0, then every 4 steps
+        assert rows.tolist() == [0, 4, 8, 12, 16, 20, 24, 27, 28, 32, 36, 40]  # the stopped run's last row, at 27
+        loads = {v: (np.asarray(x[v][:]), np.asarray(y[v][:])) for v in ("force", "moment")}
+        assert np.all(np.abs(loads["force"][0][1:, :, :2]) > 0.0)  # both groups loaded, along both axes
+        same = [k for k, s in enumerate(rows) if s != 27 and s != 28]
+        for name in x.variables:  # the rows the stop did not cut: bit for bit (the first is NaN in both)
+            assert np.array_equal(np.asarray(x[name][:])[[steps.tolist().index(rows[k]) for k in same]],
+                                  np.asarray(y[name][:])[same], equal_nan=True), name
+        # the row the stop cut in two: the same impulse over the same time
+        t, u = np.asarray(x["time"][:]), np.asarray(y["time"][:])
+        for a, b in loads.values():
+            whole = a[7] * (t[7] - t[6])
+            cut = b[7] * (u[7] - u[6]) + b[8] * (u[8] - u[7])
+            np.testing.assert_allclose(cut, whole, rtol=1e-12, atol=1e-12 * np.abs(whole).max())
