@@ -15,6 +15,20 @@ H, W, RHO, G = 0.2, 0.3, 1000.0, 9.81
 PISTON = "domain.planes[3].motion"
 
 
+def _settled_load(tmp_path, case, group):
+    """The mean load (Fx Fy Fz Mx My Mz) on ``group`` of the run of ``case`` from 0.5 s to
+    its end: the impulses the walls took over that time, divided by it."""
+    c, pm = runner.load(write_case(tmp_path / "case", case))
+    sim = build(c, pm, None)
+    impulses = sim.ctx.run.kept.setdefault("wall_impulses", {})
+    start = None
+    while not sim.done():
+        sim.advance()
+        if start is None and sim.t >= 0.5:
+            start = (sim.t, np.array(impulses.get(group, [0.0] * 6)))
+    return (np.array(impulses[group]) - start[1]) / (sim.t - start[0])
+
+
 @pytest.mark.parametrize("use, tol, scheme", [(["ghost"], 0.01, "wcsph"), (["ghost", "reflective"], 0.01, "wcsph"),
                                               (["reflective", "wall_integral"], 0.03, "wcsph"),
                                               (["reflective", "wall_integral"], 0.03, "dfsph")])
@@ -39,15 +53,7 @@ def test_water_at_rest_pushes_a_piston_plane_with_its_hydrostatic_force(tmp_path
     case = case_with(tiny_case(), {"domain.min": None, "domain.max": None, "domain.planes": planes,
                                    "blocks[0].max": [W, H], "particles.dx": 0.01, "time.t_end": 1.0,
                                    "plugins.use": use, "physics.hydrostatic_init": True, "scheme.name": scheme})
-    c, pm = runner.load(write_case(tmp_path / "case", case))
-    sim = build(c, pm, None)
-    impulses = sim.ctx.run.kept.setdefault("wall_impulses", {})
-    start = None
-    while not sim.done():
-        sim.advance()
-        if start is None and sim.t >= 0.5:
-            start = (sim.t, np.array(impulses.get(PISTON, [0.0] * 6)))
-    load = (np.array(impulses[PISTON]) - start[1]) / (sim.t - start[0])
+    load = _settled_load(tmp_path, case, PISTON)
     force, moment = RHO * G * H * H / 2, RHO * G * H ** 3 / 6
     assert load[0] == pytest.approx(-force, rel=tol)
     assert abs(load[1]) < 1e-9 * force
@@ -69,16 +75,7 @@ def test_water_at_rest_pushes_a_moving_box_wall_with_its_hydrostatic_force_with_
                                    "blocks[0].min": [0.1, 0.0], "blocks[0].max": [0.1 + W, H], "particles.dx": 0.01,
                                    "time.t_end": 1.0, "plugins.use": ["reflective", "wall_integral"],
                                    "physics.hydrostatic_init": True, "scheme.name": "dfsph"})
-    c, pm = runner.load(write_case(tmp_path / "case", case))
-    sim = build(c, pm, None)
-    impulses = sim.ctx.run.kept.setdefault("wall_impulses", {})
-    name = "domain.walls[0].motion"
-    start = None
-    while not sim.done():
-        sim.advance()
-        if start is None and sim.t >= 0.5:
-            start = (sim.t, np.array(impulses.get(name, [0.0] * 6)))
-    load = (np.array(impulses[name]) - start[1]) / (sim.t - start[0])
+    load = _settled_load(tmp_path, case, "domain.walls[0].motion")
     force, moment = RHO * G * H * H / 2, RHO * G * H ** 3 / 6
     assert load[0] == pytest.approx(-force, rel=0.03)
     assert abs(load[1]) < 0.01 * force
