@@ -171,7 +171,7 @@ class WallIntegralPlugin:
                 near = self._near_body(ctx, k, g) if reached else None
                 before = terms.grad[near] if near is not None else None
                 force, moment = self._moving_face_terms(ctx, terms, k, g)
-                if near is not None and g.name in self.bodies:  # the particles this body's faces reach, and by how much
+                if near is not None and g.name in self.bodies:  # the particles a body's faces reach, and how much
                     part = np.sqrt(((terms.grad[near] - before) ** 2).sum(axis=1))
                     members[g.name] = (near, part)
                 elif near is not None:

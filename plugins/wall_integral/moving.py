@@ -24,9 +24,9 @@ A tank holding every wall takes its load from the fluid's momentum balance, exac
 (:func:`sphcore.api.tank_load`), and a solved pressure's part from the walls' kicks
 (``ctx.solved_impulse``, :func:`sphcore.api.impulse_load`); another group takes that part
 as its share of each kick, the kick's multiple of G written with the group's part G_k of G
-(:func:`group_parts`, or the gradient its faces added). Otherwise (a piston, a paddle among fixed walls) the load
-the fluid puts on the group is the reaction of the completion's terms of its
-walls, F = sum_i m_i (2 (p_i / rho_i) G_k,i + ((rho_i - rho_ref)/rho_i) lambda A_k,i (g - a_w))
+(:func:`group_parts`, or the gradient its faces added). Otherwise (a piston, a paddle among
+fixed walls) the load the fluid puts on the group is the reaction of the completion's terms
+of its walls, F = sum_i m_i (2 (p_i / rho_i) G_k,i + ((rho_i - rho_ref)/rho_i) lambda A_k,i (g - a_w))
 over the particles near it, with the exact first moment A_k (g - a_w) = T_k (g - a_w) +
 s_k (g - a_w) of the group's walls, and its moment about the group's centre of rotation
 where it is now, sum_i (x_i - c - D) x f_i (:func:`moving_face_terms` and

@@ -63,10 +63,11 @@ def tank_load(ctx, group, pos0, acc):
 
 
 def impulse_load(ctx, group, pos, impulse):
-    """(impulse (dim,), angular impulse (3,), about z in 2D) the fluid gave ``group``, a moving
-    group that holds every wall, when the walls gave the particles at ``pos`` the momenta
-    ``impulse`` (n, dim; N s): their opposite, summed, and its moment about the group's
-    centre of rotation where it is at ``ctx.t``."""
+    """(impulse (dim,), angular impulse (3,), about z in 2D) the fluid gave the moving
+    ``group`` when the group's walls gave the particles at ``pos`` the momenta ``impulse``
+    (n, dim; N s): their opposite, summed, and its moment about the group's centre of
+    rotation where it is at ``ctx.t``. A tank that holds every wall takes the whole of a
+    solved pressure's kicks; another group its part of each (``wall_integral``)."""
     dim = ctx.params.dim
     pose = group.motion.pose(ctx.t)
     arm = pos - np.asarray(pose.centre + pose.shift, np.float64)[:dim]
