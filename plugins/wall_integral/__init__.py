@@ -207,7 +207,7 @@ class WallIntegralPlugin:
         if self.tank is not None:  # every wall the tank's: the exact momentum balance
             force, moment = tank_load(ctx, self.tank, pos0, acc)
             ctx.add_wall_load(self.tank.name, force * dt, moment * dt)
-            self._solved_tank_load(ctx, pos0)  # dfsph: its density solve's walls
+            self._solved_loads(ctx, pos0)  # dfsph: its density solve's walls
             return
         dim = ctx.params.dim
         for name, row in ctx.kept(self).get("loads", {}).items():
@@ -221,25 +221,20 @@ class WallIntegralPlugin:
         if self.plane_groups or self.face_groups:
             self._solved_loads(ctx, ctx.state.pos)
 
-    def _solved_tank_load(self, ctx, pos):
-        """The tank's part of a solved pressure (``ctx.solved_impulse``, set by a scheme that
-        solves for its pressure after each solve; the rates, and so :func:`tank_load`, hold
-        none of it): the opposite of what its walls gave the fluid, at the positions of the
-        solve."""
-        if ctx.solved_impulse is not None:
-            impulse, angular = impulse_load(ctx, self.tank, pos, ctx.solved_impulse)
-            ctx.add_wall_load(self.tank.name, impulse, angular)
-
     def _solved_loads(self, ctx, pos):
-        """Each moving group's part of a solved pressure (``ctx.solved_impulse``) at the
-        positions of the solve, which are those of the last wall terms: the kick of particle
-        i is a multiple c_i of its wall gradient G_i, and the group's share is c_i G_k,i with
-        G_k,i the group's part of G_i (taken with the terms, :meth:`sph_wall_terms`)."""
+        """Each moving group's part of a solved pressure (``ctx.solved_impulse``, set by a
+        scheme that solves for its pressure after each solve; the rates, and so
+        :func:`tank_load`, hold none of it), the opposite of what its walls gave the fluid at
+        the positions of the solve, which are those of the last wall terms. A tank holding
+        every wall takes all of it; otherwise the kick of particle i is a multiple c_i of its
+        wall gradient G_i, and a group's share is c_i G_k,i with G_k,i the group's part of
+        G_i (taken with the terms, :meth:`sph_wall_terms`)."""
         j = ctx.solved_impulse
         if j is None:
             return
         if self.tank is not None:
-            self._solved_tank_load(ctx, pos)
+            impulse, angular = impulse_load(ctx, self.tank, pos, j)
+            ctx.add_wall_load(self.tank.name, impulse, angular)
             return
         groups = {g.name: g for g in self.plane_groups + self.face_groups}
         for name, found in self._solved_parts.items():
